@@ -1,0 +1,6 @@
+#pragma once
+#include <pybind11/pybind11.h>
+
+namespace thinburn::bind {
+void define_threads(pybind11::module_& m);
+}  // namespace thinburn::bind

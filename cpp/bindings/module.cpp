@@ -1,0 +1,7 @@
+// The extension module: one define_* call per part of the model.
+#include "bindings.hpp"
+
+PYBIND11_MODULE(_core, m) {
+  m.doc() = "thinburn C++ core";
+  thinburn::bind::define_threads(m);
+}
