@@ -1,0 +1,206 @@
+#include "simulation.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+namespace thinburn {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// A stateless hash (splitmix64) so a cell's random draw depends only on the seed and the
+// cell, never on the order in which cells are visited.
+std::uint64_t mix(std::uint64_t x) {
+  x += 0x9e3779b97f4a7c15ULL;
+  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
+  return x ^ (x >> 31);
+}
+
+}  // namespace
+
+Simulation::Simulation(const RowMatX3& vertices, const RowMatX3i& faces, const RowMatX2& uv,
+                       const SimulationParams& params)
+    : params_(params),
+      sheet_(vertices, faces, uv, params.cells),
+      front_(params.cells, params.cells, sheet_.dv(), sheet_.du(), params.front) {
+  if (!(params.v0 > 0)) throw std::invalid_argument("v0 must be > 0");
+  if (!(params.burn_duration > 0)) throw std::invalid_argument("burn_duration must be > 0");
+  const int nc = sheet_.num_cells();
+  front_.set_inside(sheet_.inside());
+  state_.assign(nc, kUnburnt);
+  duration_.resize(nc);
+  v_scale_.resize(nc);
+  mass_.assign(nc, 0.0);
+  const double cell_mass = params.areal_density * sheet_.du() * sheet_.dv();
+  for (int c = 0; c < nc; ++c) {
+    duration_[c] = params.burn_duration * std::max(0.1, 1.0 + params.duration_noise * noise(c, 1));
+    v_scale_[c] = std::max(0.1, 1.0 + params.speed_noise * noise(c, 2));
+    if (sheet_.inside()[c]) mass_[c] = cell_mass;
+  }
+  speed_fn_ = [this](int cell) { return local_speed(cell); };
+}
+
+double Simulation::noise(int cell, std::uint64_t stream) const {
+  const std::uint64_t h = mix(params_.seed ^ mix(stream * 0x100000001b3ULL + static_cast<std::uint64_t>(cell)));
+  return 2.0 * (static_cast<double>(h >> 11) * 0x1.0p-53) - 1.0;  // uniform in [-1, 1)
+}
+
+Eigen::Vector3d Simulation::cell_position(int cell) const {
+  return sheet_.cell_rest().row(cell).transpose();
+}
+
+double Simulation::grad2(int cell) const {
+  // Rise over run of the current surface out of the rest plane, along rows and columns,
+  // from central differences (one-sided at the outline), squared and summed: |grad h|².
+  const int N = sheet_.cells(), r = cell / N, c = cell % N;
+  const auto& inside = sheet_.inside();
+  const Eigen::Vector3d& n = sheet_.frame().n;
+  auto slope2 = [&](int a, int b) {
+    if (a == b) return 0.0;
+    const Eigen::Vector3d d = cell_position(b) - cell_position(a);
+    const double rise = d.dot(n), run = (d - rise * n).norm();
+    return run > 0 ? (rise * rise) / (run * run) : 0.0;
+  };
+  auto pick = [&](int rr, int cc) { return (rr >= 0 && rr < N && cc >= 0 && cc < N && inside[rr * N + cc]) ? rr * N + cc : cell; };
+  return slope2(pick(r, c - 1), pick(r, c + 1)) + slope2(pick(r - 1, c), pick(r + 1, c));
+}
+
+LocalSpeed Simulation::local_speed(int cell) const {
+  const double v0 = params_.v0 * v_scale_[cell];
+  LocalSpeed s{std::max(params_.v_floor, 1.0 - params_.cv * grad2(cell)) * v0, 0.0, 0.0};
+  if (params_.climb == 0.0 && (params_.wind_spread == 0.0 || wind_.isZero())) return s;
+  // The drive vector in grid axes: world-up and the wind, projected on the local tangents.
+  const int N = sheet_.cells(), r = cell / N, c = cell % N;
+  const int cl = std::max(c - 1, 0), cr = std::min(c + 1, N - 1), rd = std::max(r - 1, 0), ru = std::min(r + 1, N - 1);
+  Eigen::Vector3d t_col = cell_position(r * N + cr) - cell_position(r * N + cl);
+  Eigen::Vector3d t_row = cell_position(ru * N + c) - cell_position(rd * N + c);
+  if (t_col.norm() > 0) t_col.normalize();
+  if (t_row.norm() > 0) t_row.normalize();
+  const Eigen::Vector3d drive = params_.climb * Eigen::Vector3d::UnitZ() + params_.wind_spread * wind_;
+  s.e_row = drive.dot(t_row);
+  s.e_col = drive.dot(t_col);
+  const double e = std::hypot(s.e_row, s.e_col);
+  if (e > params_.max_drive) {
+    s.e_row *= params_.max_drive / e;
+    s.e_col *= params_.max_drive / e;
+  }
+  return s;
+}
+
+int Simulation::ignite(const Eigen::Vector3d& point, double t, double radius) {
+  const int nc = sheet_.num_cells(), N = sheet_.cells();
+  const auto& inside = sheet_.inside();
+  int best = -1;
+  double best_d2 = kInf;
+  std::vector<int> lit;
+  for (int c = 0; c < nc; ++c) {
+    if (!inside[c]) continue;
+    const double d2 = (cell_position(c) - point).squaredNorm();
+    if (d2 < best_d2) best_d2 = d2, best = c;
+    if (radius > 0 && d2 <= radius * radius) lit.push_back(c);
+  }
+  const double reach = std::max({radius, 3.0 * std::max(sheet_.du(), sheet_.dv()), 0.02 * std::sqrt(sheet_.area())});
+  if (best < 0 || best_d2 > reach * reach)
+    throw std::invalid_argument("point: no cell of the sheet lies within " + std::to_string(reach) +
+                                " m of the point (nearest is " + std::to_string(std::sqrt(best_d2)) + " m away)");
+  if (lit.empty()) lit.push_back(best);
+  for (int c : lit) front_.ignite(FrontSource{static_cast<double>(c / N), static_cast<double>(c % N), t}, speed_fn_);
+  return static_cast<int>(lit.size());
+}
+
+void Simulation::step(double dt) {
+  if (!(dt > 0) || !std::isfinite(dt)) throw std::invalid_argument("dt must be > 0 and finite");
+  const double t_end = time_ + dt;
+  for (int c : front_.advance(t_end, speed_fn_)) {
+    if (state_[c] != kUnburnt) continue;
+    state_[c] = kBurning;
+    burning_.push_back(c);
+  }
+  time_ = t_end;
+  retire_burnt();
+}
+
+void Simulation::retire_burnt() {
+  const auto& arrival = front_.arrival();
+  const double keep = params_.ash_fraction;
+  std::size_t w = 0;
+  for (int c : burning_) {
+    if (arrival[c] + duration_[c] <= time_) {
+      state_[c] = kBurnt;
+      mass_[c] *= keep;
+    } else {
+      burning_[w++] = c;
+    }
+  }
+  burning_.resize(w);
+}
+
+std::vector<double> Simulation::ignition_times() const {
+  std::vector<double> t(front_.arrival());
+  for (std::size_t c = 0; c < t.size(); ++c)
+    if (state_[c] == kUnburnt) t[c] = kInf;  // accepted only when its time has come
+  return t;
+}
+
+std::vector<int> Simulation::fringe() const {
+  const int N = sheet_.cells();
+  const auto& inside = sheet_.inside();
+  std::vector<int> out;
+  for (int c : burning_) {
+    const int r = c / N, col = c % N;
+    bool edge = false;
+    for (int dr = -1; dr <= 1 && !edge; ++dr)
+      for (int dc = -1; dc <= 1 && !edge; ++dc) {
+        const int rr = r + dr, cc = col + dc;
+        if ((dr || dc) && rr >= 0 && rr < N && cc >= 0 && cc < N && inside[rr * N + cc] &&
+            state_[rr * N + cc] == kUnburnt)
+          edge = true;
+      }
+    if (edge) out.push_back(c);
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+std::vector<double> Simulation::cell_char() const {
+  const auto& arrival = front_.arrival();
+  std::vector<double> ch(arrival.size(), 0.0);
+  for (std::size_t c = 0; c < ch.size(); ++c)
+    if (state_[c] != kUnburnt) ch[c] = std::clamp((time_ - arrival[c]) / duration_[c], 0.0, 1.0);
+  return ch;
+}
+
+RowMatX3 Simulation::cell_positions() const {
+  RowMatX3 p(sheet_.num_cells(), 3);
+  for (int c = 0; c < sheet_.num_cells(); ++c) p.row(c) = cell_position(c).transpose();
+  return p;
+}
+
+RowMatX3 Simulation::vertex_positions() const { return sheet_.vertices(); }
+
+Eigen::VectorXd Simulation::vertex_char() const {
+  const std::vector<double> ch = cell_char();
+  Eigen::VectorXd out(sheet_.vertices().rows());
+  sheet_.cells_to_vertices(ch.data(), out.data());
+  return out;
+}
+
+Eigen::VectorXd Simulation::vertex_ignition_times() const {
+  const std::vector<double> t = ignition_times();
+  const auto& vc = sheet_.vertex_cell();
+  Eigen::VectorXd out(vc.size());
+  for (std::size_t i = 0; i < vc.size(); ++i) out[i] = t[vc[i]];
+  return out;
+}
+
+Eigen::VectorXd Simulation::vertex_burnout_times() const {
+  Eigen::VectorXd out = vertex_ignition_times();
+  const auto& vc = sheet_.vertex_cell();
+  for (std::size_t i = 0; i < vc.size(); ++i) out[i] += duration_[vc[i]];
+  return out;
+}
+
+}  // namespace thinburn

@@ -1,0 +1,98 @@
+#pragma once
+/// @brief The whole model, stepped in time: cells and fire front (paper §3), and the parts
+/// that later hook onto them.
+#include "fire_front.hpp"
+#include "sheet.hpp"
+
+#include <Eigen/Core>
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+namespace thinburn {
+
+/// @brief Cell states, as in the paper §3.1.
+enum CellState : std::uint8_t { kUnburnt = 0, kBurning = 1, kBurnt = 2 };
+
+/// @brief Every scalar the simulation needs; the Python layer fills it from a material preset.
+struct SimulationParams {
+  int cells = 128;
+  FrontMethod front = FrontMethod::Fmm2;
+  std::uint64_t seed = 0;
+  // Spread (eq 1): V = V0·(1 − Cv·grad²), floored at v_floor·V0.
+  double v0 = 0.0035;          ///< m/s
+  double cv = 0.5;             ///< eq 1 spread coefficient
+  double v_floor = 0.05;       ///< fraction of V0 below which V never falls
+  double speed_noise = 0.0;    ///< relative per-cell jitter of V0 (seeded), breaks grid symmetry
+  double burn_duration = 4.0;  ///< s a cell burns before it is burnt
+  double duration_noise = 0.0; ///< relative per-cell jitter of the burn duration
+  // Direction-dependent spread (beyond the paper; 0 keeps eq 1 symmetric).
+  double climb = 0.0;          ///< drive toward world-up along the sheet, |e| per unit slope
+  double wind_spread = 0.0;    ///< drive per m/s of wind along the sheet
+  double max_drive = 0.9;      ///< cap on |e| so the back fire never stalls completely
+  // Mass: burnt cells lose mass and turn to ash.
+  double areal_density = 0.045;  ///< kg/m^2
+  double ash_fraction = 0.1;     ///< share of the mass a burnt cell keeps
+};
+
+class Simulation {
+ public:
+  Simulation(const RowMatX3& vertices, const RowMatX3i& faces, const RowMatX2& uv,
+             const SimulationParams& params);
+
+  /// @brief Ignite the inside cells within radius of a point (the nearest one when radius is 0)
+  /// at time t. Throws std::invalid_argument when no cell lies within reach of the point.
+  /// @return the number of cells lit.
+  int ignite(const Eigen::Vector3d& point, double t, double radius);
+  /// @brief Advance by dt seconds (dt > 0).
+  void step(double dt);
+
+  double time() const { return time_; }
+  const Sheet& sheet() const { return sheet_; }
+  const SimulationParams& params() const { return params_; }
+  void set_wind(const Eigen::Vector3d& w) { wind_ = w; }
+  const Eigen::Vector3d& wind() const { return wind_; }
+
+  std::vector<std::uint8_t> cell_states() const { return state_; }
+  std::vector<double> ignition_times() const;
+  std::vector<double> burn_durations() const { return duration_; }
+  /// @brief Fringe cells (paper §3.1): burning cells with a neighbour neither burning nor burnt.
+  std::vector<int> fringe() const;
+  /// @brief Char per cell in [0, 1]: 0 before ignition, rising over the burn, 1 when burnt.
+  std::vector<double> cell_char() const;
+  /// @brief Remaining mass per cell, kg.
+  std::vector<double> cell_mass() const { return mass_; }
+  /// @brief Current positions of the cell centres (N*N x 3).
+  RowMatX3 cell_positions() const;
+  RowMatX3 vertex_positions() const;
+  Eigen::VectorXd vertex_char() const;
+  Eigen::VectorXd vertex_ignition_times() const;
+  Eigen::VectorXd vertex_burnout_times() const;
+  /// @brief Cells in the front's narrow band: the active set of the eikonal solver.
+  std::size_t front_active() const { return front_.num_trial(); }
+  std::size_t num_burning() const { return burning_.size(); }
+  /// @brief The local spread law at a cell now (eq 1 and the drive vector).
+  LocalSpeed local_speed(int cell) const;
+  /// @brief grad² at a cell: squared slope of the current surface out of the rest plane.
+  double grad2(int cell) const;
+
+ private:
+  Eigen::Vector3d cell_position(int cell) const;
+  void retire_burnt();
+  double noise(int cell, std::uint64_t stream) const;
+
+  SimulationParams params_;
+  Sheet sheet_;
+  FireFront front_;
+  SpeedFn speed_fn_;
+  double time_ = 0.0;
+  Eigen::Vector3d wind_ = Eigen::Vector3d::Zero();
+  std::vector<std::uint8_t> state_;
+  std::vector<double> duration_;
+  std::vector<double> v_scale_;  // per-cell V0 multiplier (seeded noise)
+  std::vector<double> mass_;
+  std::vector<int> burning_;     // the cells burning now: an active list, never a sweep
+};
+
+}  // namespace thinburn

@@ -1,0 +1,83 @@
+"""Material presets: the paper's Table 1, with documented defaults for what it leaves out.
+
+Units are SI with the scene unit = 1 m. Table 1 gives no units; our readings:
+
+* ``mass``: areal density in units of 0.1 kg/m^2 (paper 0.45 -> 45 g/m^2, a light printing
+  paper; cloth 1.45 -> 145 g/m^2, a cotton shirting).
+* ``V0``: spread speed in mm/s (paper 3.5 mm/s against the ~4 mm/s measured for 80 g/m^2
+  paper spreading horizontally; see docs/units.md).
+* ``Cp``, ``C_damping``, ``K_*``: passed to the model as they are; docs/dynamics.md gives the
+  scale that turns them into forces.
+
+Everything else is ours, chosen and documented in docs/materials.md.
+"""
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, fields, replace
+from types import MappingProxyType
+
+
+@dataclass(frozen=True)
+class Material:
+    """One burnable material. The first seven fields are Table 1's columns."""
+
+    name: str
+    mass: float          # Table 1, areal density in 0.1 kg/m^2
+    V0: float            # Table 1, spread speed in mm/s
+    Cp: float            # Table 1, pyrolysis coefficient (eq 3)
+    C_damping: float     # Table 1, damping coefficient (eq 12)
+    K_structure: float   # Table 1
+    K_shear: float       # Table 1
+    K_flex: float        # Table 1
+    figure: int = 0      # the paper's figure that used this row
+    # --- not in the paper; our documented defaults ---
+    Cv: float = 0.5               # eq 1 spread coefficient (grad = 1, a 45° slope, halves V)
+    burn_duration: float = 4.0    # s a cell burns before it is burnt
+    speed_noise: float = 0.08     # relative per-cell jitter of V0 (organic, non-grid fronts)
+    duration_noise: float = 0.2   # relative per-cell jitter of the burn duration
+    ash_fraction: float = 0.1     # share of its mass a burnt cell keeps as ash
+
+    @property
+    def areal_density(self) -> float:
+        """kg/m^2."""
+        return self.mass * 0.1
+
+    @property
+    def v0(self) -> float:
+        """Spread speed V0 in m/s."""
+        return self.V0 * 1e-3
+
+    def with_(self, **changes) -> "Material":
+        """A copy with some fields changed (validated by Simulation)."""
+        return replace(self, **changes)
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
+_TABLE1 = (
+    # name, mass, V0, Cp, C_damping, K_structure, K_shear, K_flex, figure, burn_duration
+    ("paper", 0.45, 3.5, 1.0, 1.7, 0.05, 0.05, 0.05, 8, 4.0),
+    ("cloth", 1.45, 4.0, 0.8, 2.5, 0.3, 0.01, 0.04, 9, 6.0),
+    ("hard_paper", 10.45, 3.5, 1.0, 1.7, 0.5, 0.01, 0.001, 10, 6.0),
+    ("silk", 6.45, 4.0, 0.8, 2.5, 0.01, 0.01, 0.01, 11, 3.0),
+    ("curtain", 1.45, 4.0, 0.8, 2.5, 0.3, 0.01, 0.04, 12, 6.0),
+)
+
+MATERIALS = MappingProxyType({
+    row[0]: Material(*row[:9], burn_duration=row[9]) for row in _TABLE1
+})
+"""The five presets of Table 1, by name."""
+
+MATERIAL_FIELDS = tuple(f.name for f in fields(Material) if f.name != "name")
+
+
+def resolve_material(material) -> Material:
+    """A Material from a preset name or a Material; bad input names the argument."""
+    if isinstance(material, Material):
+        return material
+    if isinstance(material, str):
+        if material not in MATERIALS:
+            raise ValueError(f"material: unknown preset {material!r}; choose one of {sorted(MATERIALS)}")
+        return MATERIALS[material]
+    raise TypeError(f"material must be a preset name or a thinburn.Material, got {type(material).__name__}")
