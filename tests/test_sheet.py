@@ -3,9 +3,7 @@ import numpy as np
 import pytest
 
 import thinburn
-from thinburn.scenes import grid_uv, rect_sheet
-
-from .conftest import disk_mesh
+from thinburn.scenes import disk_sheet, grid_uv, rect_sheet
 
 
 def test_rectangle_fills_every_cell(a4):
@@ -19,7 +17,7 @@ def test_rectangle_fills_every_cell(a4):
 def test_disk_outline_covers_its_area():
     # Fraction of the bounding square that a disk covers is pi/4; the polygonal disk
     # (48 segments) has area 48/(2 pi) sin(2 pi/48) of that; cells sample it to ~1/N.
-    v, f = disk_mesh(0.1, rings=16, segments=48)
+    v, f = disk_sheet(0.1, rings=16, segments=48)
     sim = thinburn.Simulation(v, f, cells=96)
     polygon_area = 0.5 * 48 * 0.1**2 * np.sin(2 * np.pi / 48)
     frac = sim.inside().mean()
