@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <climits>
+#include <cstdlib>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -45,6 +46,12 @@ FireFront::FireFront(int ny, int nx, double dy, double dx, FrontMethod method)
   fixed_.assign(n, 0);
   tent_.assign(n, kInf);
   arrival_.assign(n, kInf);
+  tau_.assign(n, kInf);
+  label_.assign(n, -1);
+  if (const char* e = std::getenv("TB_FACTOR")) factor_on_ = std::atoi(e);
+  if (const char* e = std::getenv("TB_RADIUS")) init_radius_ = std::atof(e);
+  if (const char* e = std::getenv("TB_ANISO2")) aniso2_ = std::atoi(e);
+  if (const char* e = std::getenv("TB_CHAR")) charcheck_ = std::atoi(e);
   stamp_.assign(n, 0);
   heap_.reserve(4 * static_cast<std::size_t>(ny + nx) + 64);
   if (!cellular()) return;
@@ -97,8 +104,10 @@ bool FireFront::accepted(int cell) const {
   return state_[cell] == 2;
 }
 
-void FireFront::push(int cell, double t) {
+void FireFront::push(int cell, double t, double tau, int label) {
   tent_[cell] = t;
+  tau_[cell] = tau;
+  label_[cell] = label;
   if (state_[cell] == 0) {
     state_[cell] = 1;
     ++n_trial_;
@@ -134,7 +143,7 @@ void FireFront::ignite(const FrontSource& s, const SpeedFn& speed) {
   const LocalSpeed src = speed(cell);
   if (!(src.v > 0.0)) return;
   if (cellular()) {
-    if (state_[cell] != 2 && s.t0 < tent_[cell]) push(cell, s.t0);
+    if (state_[cell] != 2 && s.t0 < tent_[cell]) push(cell, s.t0, s.t0, -1);
     return;
   }
   ignite_fmm(s, cell, src, speed);
@@ -144,7 +153,9 @@ void FireFront::ignite(const FrontSource& s, const SpeedFn& speed) {
 // from the source cell without crossing cells that cannot burn.
 void FireFront::ignite_fmm(const FrontSource& s, int cell, const LocalSpeed& src,
                            const SpeedFn& speed) {
-  const double radius = method_ == FrontMethod::Fmm1 ? kInitRadiusFmm1 : kInitRadiusFmm2;
+  const double radius = method_ == FrontMethod::Fmm1 ? kInitRadiusFmm1 : init_radius_;
+  const int label = static_cast<int>(sources_.size());
+  sources_.push_back({s.row, s.col, s.t0, src});
   ++stamp_id_;
   flood_.clear();
   flood_.push_back(cell);
@@ -152,11 +163,9 @@ void FireFront::ignite_fmm(const FrontSource& s, int cell, const LocalSpeed& src
   static const int kDr[4] = {-1, 1, 0, 0}, kDc[4] = {0, 0, -1, 1};
   for (std::size_t i = 0; i < flood_.size(); ++i) {
     const int q = flood_[i], qr = q / nx_, qc = q % nx_;
-    const double my = (qr - s.row) * dy_, mx = (qc - s.col) * dx_;
-    const double d = std::hypot(my, mx);
-    const double t = s.t0 + (d > 0.0 ? d / ray_speed(src, my / d, mx / d) : 0.0);
+    const double t = s.t0 + factor(label, q, nullptr, nullptr);
     if (state_[q] != 2 && t < tent_[q]) {
-      push(q, t);
+      push(q, t, method_ == FrontMethod::Fmm2 ? 1.0 : t, method_ == FrontMethod::Fmm2 ? label : -1);
       fixed_[q] = 1;
     }
     for (int k = 0; k < 4; ++k) {
@@ -169,6 +178,31 @@ void FireFront::ignite_fmm(const FrontSource& s, int cell, const LocalSpeed& src
       if (speed(n).v > 0.0) flood_.push_back(n);
     }
   }
+}
+
+// Travel time T0 = |d| / ray speed from source `label` to the centre of `cell` (exact for a
+// uniform medium), and optionally its gradient.
+double FireFront::factor(int label, int cell, double* g_row, double* g_col) const {
+  const SourceRec& src = sources_[label];
+  const double my = (cell / nx_ - src.row) * dy_, mx = (cell % nx_ - src.col) * dx_;
+  const double d = std::hypot(my, mx);
+  const double denom = src.s.v * (1.0 - drive_sq(src.s));
+  if (g_row) {
+    *g_row = d > 0.0 ? (my / d - src.s.e_row) / denom : 0.0;
+    *g_col = d > 0.0 ? (mx / d - src.s.e_col) / denom : 0.0;
+  }
+  return (d - (src.s.e_row * my + src.s.e_col * mx)) / denom;
+}
+
+// The unknown of an accepted cell in the variables of `label`: tau with T = t0 + T0 tau, or
+// T itself without a label.
+double FireFront::unknown_of(int cell, int label) const {
+  if (label < 0) return arrival_[cell];
+  if (label_[cell] == label) return tau_[cell];
+  const double t0f = factor(label, cell, nullptr, nullptr);
+  const SourceRec& src = sources_[label];
+  if (!(t0f > 1e-9 * std::min(dy_, dx_) / src.s.v)) return 1.0;
+  return (arrival_[cell] - src.t0) / t0f;
 }
 
 const std::vector<int>& FireFront::advance(double t_end, const SpeedFn& speed) {
@@ -220,7 +254,7 @@ void FireFront::relax_cellular(int cell, const SpeedFn& speed) {
     if (!(sn.v > 0.0)) continue;
     const double slowness = 0.5 * (1.0 / ray_speed(sc, st.ur, st.uc) + 1.0 / ray_speed(sn, st.ur, st.uc));
     const double t = tc + st.length * slowness;
-    if (t < tent_[n]) push(n, t);
+    if (t < tent_[n]) push(n, t, t, -1);
   }
 }
 
@@ -236,98 +270,156 @@ void FireFront::update_fmm_neighbours(int cell, const SpeedFn& speed) {
     if (!inside_[n] || state_[n] == 2) continue;
     const LocalSpeed sn = speed(n);
     if (!(sn.v > 0.0)) continue;
-    double t = solve_fmm(n, sn);
-    if (!(t < kInf)) continue;
-    t = std::max(t, tc);  // causality, also when the speed law changed between calls
+    Solution sol = solve_fmm(n, sn);
+    if (!(sol.t < kInf)) continue;
+    if (sol.t < tc) {  // causality, also when the speed law changed between calls
+      sol.t = tc;
+      sol.label = -1;
+      sol.tau = tc;
+    }
     if (fixed_[n]) {
       // An exactly initialised cell keeps its time unless another front gets there clearly
       // earlier (by more than half a cell's travel time): discretisation noise must not
       // replace the exact value.
       const double slack = 0.5 * hmin / (sn.v * (1.0 + std::sqrt(drive_sq(sn))));
-      if (!(t < tent_[n] - slack)) continue;
+      if (!(sol.t < tent_[n] - slack)) continue;
       fixed_[n] = 0;
     }
-    if (t != tent_[n]) push(n, t);
+    if (sol.t != tent_[n]) push(n, sol.t, sol.tau, sol.label);
   }
 }
 
-// Upwind difference candidates of one axis: (T - a) * c approximates |dT/dx_axis|, sigma its
-// sign. Second order, (3T - 4T1 + T2) / 2h, where the second upwind cell is accepted and not
-// later than the first.
-int FireFront::axis_candidates(int r, int c, int axis, bool all, AxisCand* out) const {
+// Upwind difference candidates of one axis in the unknown u of `label`: (u - a) * c
+// approximates |du/dx_axis|, sigma its sign. Second order, (3u - 4u1 + u2) / 2h, where the
+// second upwind cell is accepted and not later than the first.
+int FireFront::axis_candidates(int r, int c, int axis, bool all, int label, bool second,
+                               AxisCand* out) const {
   const double h = axis == 0 ? dy_ : dx_;
   const int lim = axis == 0 ? ny_ : nx_;
   const int pos = axis == 0 ? r : c;
   const int stride = axis == 0 ? nx_ : 1;
   const int cell = r * nx_ + c;
   int n_out = 0;
-  double t1_best = kInf;
   for (int side = -1; side <= 1; side += 2) {
     if (pos + side < 0 || pos + side >= lim) continue;
     const int n1 = cell + side * stride;
     if (state_[n1] != 2) continue;
     const double t1 = arrival_[n1];
-    AxisCand k{t1, 1.0 / h, side < 0 ? 1.0 : -1.0};
-    if (method_ == FrontMethod::Fmm2 && pos + 2 * side >= 0 && pos + 2 * side < lim) {
+    if (!all && n_out == 1 && !(t1 < out[0].t1)) continue;  // isotropic: the earlier one
+    const double u1 = unknown_of(n1, label);
+    AxisCand k{u1, 1.0 / h, side < 0 ? 1.0 : -1.0, t1};
+    if (second && pos + 2 * side >= 0 && pos + 2 * side < lim) {
       const int n2 = cell + 2 * side * stride;
       if (state_[n2] == 2 && arrival_[n2] <= t1) {
-        k.a = (4.0 * t1 - arrival_[n2]) / 3.0;
+        k.a = (4.0 * u1 - unknown_of(n2, label)) / 3.0;
         k.c = 1.5 / h;
       }
     }
-    if (all) {
-      out[n_out++] = k;
-    } else if (t1 < t1_best) {  // isotropic: the earlier neighbour is the upwind one
-      t1_best = t1;
-      out[0] = k;
-      n_out = 1;
-    }
+    out[all ? n_out : 0] = k;
+    n_out = all ? n_out + 1 : 1;
   }
   return n_out;
 }
 
 // Solve h(grad T) = 1 at a cell, h(p) = v (e.p + sqrt((1-|e|^2)|p|^2 + (e.p)^2)), over the
-// upwind neighbour combinations; the earliest upwind-consistent solution wins.
-double FireFront::solve_fmm(int cell, const LocalSpeed& s) const {
+// upwind neighbour combinations; the earliest causal, upwind-consistent solution wins.
+// Fmm2 solves for tau in T = t0 + T0 tau (T0 the uniform-medium travel time from the source
+// of the earliest neighbour), so grad T = tau grad T0 + T0 grad tau is affine in tau.
+FireFront::Solution FireFront::solve_fmm(int cell, const LocalSpeed& s) const {
+  static const int kDr[4] = {-1, 1, 0, 0}, kDc[4] = {0, 0, -1, 1};
   const int r = cell / nx_, c = cell % nx_;
-  const bool iso = s.e_row == 0.0 && s.e_col == 0.0;
-  AxisCand kr[2], kc[2];
-  const int n_r = axis_candidates(r, c, 0, !iso, kr);
-  const int n_c = axis_candidates(r, c, 1, !iso, kc);
-  double best = kInf;
-  for (int i = 0; i < n_r; ++i)
-    best = std::min(best, kr[i].a + 1.0 / (kr[i].c * normal_speed(s, kr[i].sigma, 0.0)));
-  for (int j = 0; j < n_c; ++j)
-    best = std::min(best, kc[j].a + 1.0 / (kc[j].c * normal_speed(s, 0.0, kc[j].sigma)));
-  if (n_r == 0 || n_c == 0) return best;
-
-  const double w = 1.0 - drive_sq(s), iv = 1.0 / s.v;
-  for (int i = 0; i < n_r; ++i)
-    for (int j = 0; j < n_c; ++j) {
-      // p(tau) = P tau + Q with tau = T - max(a) >= 0. Squaring h(p) = 1 gives the
-      // quadratic w|p|^2 + 2 iv e.p - iv^2 = 0; C < 0 <=> h(Q) < 1, and then it has exactly
-      // one positive root, the two-sided solution with T > both upwind values.
-      const double amax = std::max(kr[i].a, kc[j].a);
-      const double pr = kr[i].sigma * kr[i].c, pc = kc[j].sigma * kc[j].c;
-      const double qr = pr * (amax - kr[i].a), qc = pc * (amax - kc[j].a);
-      const double C = w * (qr * qr + qc * qc) + 2.0 * iv * (s.e_row * qr + s.e_col * qc) - iv * iv;
-      if (!(C < 0.0)) continue;
-      const double A = w * (pr * pr + pc * pc);
-      const double B = 2.0 * w * (pr * qr + pc * qc) + 2.0 * iv * (s.e_row * pr + s.e_col * pc);
-      const double sq = std::sqrt(B * B - 4.0 * A * C);
-      const double tau = B >= 0.0 ? 2.0 * C / (-B - sq) : (-B + sq) / (2.0 * A);
-      if (!iso) {
-        // The characteristic (grad_p h) must come from inside the upwind quadrant.
-        const double gr0 = pr * tau + qr, gc0 = pc * tau + qc;
-        const double ep = s.e_row * gr0 + s.e_col * gc0;
-        const double S = std::sqrt(w * (gr0 * gr0 + gc0 * gc0) + ep * ep);
-        const double gr = s.e_row + (w * gr0 + ep * s.e_row) / S;
-        const double gc = s.e_col + (w * gc0 + ep * s.e_col) / S;
-        if (kr[i].sigma * gr < -1e-12 || kc[j].sigma * gc < -1e-12) continue;
+  int label = -1;
+  if (method_ == FrontMethod::Fmm2 && factor_on_) {
+    double tmin = kInf;
+    for (int k = 0; k < 4; ++k) {
+      const int nr = r + kDr[k], nc = c + kDc[k];
+      if (nr < 0 || nr >= ny_ || nc < 0 || nc >= nx_) continue;
+      const int n = nr * nx_ + nc;
+      if (state_[n] == 2 && arrival_[n] < tmin) {
+        tmin = arrival_[n];
+        label = label_[n];
       }
-      best = std::min(best, amax + tau);
     }
-  return best;
+  }
+  double t0 = 0.0, T0 = 1.0, g[2] = {0.0, 0.0};
+  if (label >= 0) {
+    T0 = factor(label, cell, &g[0], &g[1]);
+    t0 = sources_[label].t0;
+    if (!(T0 > 1e-9 * std::min(dy_, dx_) / sources_[label].s.v)) {  // at the source point
+      label = -1;
+      t0 = 0.0, T0 = 1.0, g[0] = g[1] = 0.0;
+    }
+  }
+  const bool iso = s.e_row == 0.0 && s.e_col == 0.0;
+  AxisCand ax[2][2];
+  int n_ax[2];
+  const bool all = !iso;
+  const bool second = method_ == FrontMethod::Fmm2 && (iso || aniso2_);
+  n_ax[0] = axis_candidates(r, c, 0, all, label, second, ax[0]);
+  n_ax[1] = axis_candidates(r, c, 1, all, label, second, ax[1]);
+  const double w = 1.0 - drive_sq(s), iv = 1.0 / s.v;
+  const double e[2] = {s.e_row, s.e_col};
+  // Two-sided solutions win over one-sided ones: a one-sided update drops a derivative (of
+  // tau when factored) and can then undershoot. Inconsistent solutions are the last resort.
+  Solution two{kInf, kInf, label}, one{kInf, kInf, label}, loose{kInf, kInf, label};
+  for (int i = -1; i < n_ax[0]; ++i)
+    for (int j = -1; j < n_ax[1]; ++j) {
+      if (i < 0 && j < 0) continue;
+      const AxisCand* use[2] = {i >= 0 ? &ax[0][i] : nullptr, j >= 0 ? &ax[1][j] : nullptr};
+      // p(tau) = P tau + Q; causality: T >= every upwind neighbour used.
+      double P[2], Q[2], tlo = -kInf;
+      // A one-sided update takes dT/dx = 0 across (not dtau/dx = 0): where the two-sided one
+      // fails upwind consistency, T is near stationary across, whatever tau does.
+      for (int k = 0; k < 2; ++k) {
+        P[k] = 0.0;
+        Q[k] = 0.0;
+        if (!use[k]) continue;
+        P[k] = g[k] + T0 * use[k]->sigma * use[k]->c;
+        Q[k] = -T0 * use[k]->sigma * use[k]->c * use[k]->a;
+        tlo = std::max(tlo, use[k]->t1);
+      }
+      const double tau_lo = (tlo - t0) / T0;
+      const double pl[2] = {P[0] * tau_lo + Q[0], P[1] * tau_lo + Q[1]};
+      // Squaring h(p) = 1 gives q(p) = w|p|^2 + 2 iv e.p - iv^2 = 0, a quadratic in tau. Of
+      // its roots on the h = +1 sheet (iv - e.p >= 0) keep the larger: as tau grows, p takes
+      // the upwind signs (the smaller root, if any, has T decreasing away from a neighbour).
+      const double A = w * (P[0] * P[0] + P[1] * P[1]);
+      if (!(A > 0.0)) continue;
+      const double B = 2.0 * w * (P[0] * pl[0] + P[1] * pl[1]) + 2.0 * iv * (e[0] * P[0] + e[1] * P[1]);
+      const double C = w * (pl[0] * pl[0] + pl[1] * pl[1]) + 2.0 * iv * (e[0] * pl[0] + e[1] * pl[1]) - iv * iv;
+      const double disc = B * B - 4.0 * A * C;
+      if (!(disc >= 0.0)) continue;
+      const double sq = std::sqrt(disc);
+      const double hi = B < 0.0 ? (sq - B) / (2.0 * A) : (B + sq > 0.0 ? -2.0 * C / (B + sq) : 0.0);
+      const double lo = B >= 0.0 ? -(B + sq) / (2.0 * A) : 2.0 * C / (sq - B);
+      auto on_sheet = [&](double d) {
+        return iv - (e[0] * (P[0] * d + pl[0]) + e[1] * (P[1] * d + pl[1])) >= -1e-12 * iv;
+      };
+      double dtau = hi;
+      if (!on_sheet(hi)) {
+        if (!on_sheet(lo)) continue;
+        dtau = lo;
+      }
+      bool ok = dtau >= 0.0;  // causal: not earlier than the neighbours used
+      dtau = std::max(dtau, 0.0);
+      const double tau = tau_lo + dtau;
+      const double t = t0 + T0 * tau;
+      const double p[2] = {P[0] * dtau + pl[0], P[1] * dtau + pl[1]};
+      // Upwind consistency: the characteristic (grad_p h, along p when isotropic) must come
+      // from the side of every neighbour used.
+      double gh[2] = {p[0], p[1]};
+      if (!iso && charcheck_) {
+        const double ep = e[0] * p[0] + e[1] * p[1];
+        const double S = std::sqrt(w * (p[0] * p[0] + p[1] * p[1]) + ep * ep);
+        for (int k = 0; k < 2; ++k) gh[k] = e[k] + (w * p[k] + ep * e[k]) / S;
+      }
+      const double tol = 1e-12 * (std::abs(gh[0]) + std::abs(gh[1]));
+      for (int k = 0; k < 2; ++k)
+        if (use[k] && use[k]->sigma * gh[k] < -tol) ok = false;
+      Solution& slot = !ok ? loose : (use[0] && use[1]) ? two : one;
+      if (t < slot.t) slot = Solution{t, label >= 0 ? tau : t, label};
+    }
+  return two.t < kInf ? two : one.t < kInf ? one : loose;
 }
 
 std::vector<double> arrival_times(int ny, int nx, const std::vector<double>& speed,

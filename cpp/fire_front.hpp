@@ -90,18 +90,30 @@ class FireFront {
     bool need_both;           // knight moves cross both cells; diagonals squeeze past
   };
   struct AxisCand {
-    double a;      // upwind value of the difference formula (T - a) * c
-    double c;      // alpha / h
+    double a;      // upwind value of the difference (u - a) * c, u the unknown
+    double c;      // alpha / h (alpha = 1 first order, 3/2 second order)
     double sigma;  // +1 when the upwind neighbour has the lower index
+    double t1;     // arrival time of the upwind neighbour
+  };
+  struct SourceRec {
+    double row, col, t0;
+    LocalSpeed s;  // speed of the source cell at ignition: shapes the factor T0
+  };
+  struct Solution {
+    double t, tau;
+    int label;
   };
 
   bool cellular() const { return method_ == FrontMethod::Cellular8 || method_ == FrontMethod::Cellular16; }
-  void push(int cell, double t);
+  void push(int cell, double t, double tau, int label);
   void accept(int cell, double t);
   void relax_cellular(int cell, const SpeedFn& speed);
   void update_fmm_neighbours(int cell, const SpeedFn& speed);
-  double solve_fmm(int cell, const LocalSpeed& s) const;
-  int axis_candidates(int r, int c, int axis, bool all, AxisCand* out) const;
+  Solution solve_fmm(int cell, const LocalSpeed& s) const;
+  int axis_candidates(int r, int c, int axis, bool all, int label, bool second,
+                      AxisCand* out) const;
+  double factor(int label, int cell, double* g_row, double* g_col) const;
+  double unknown_of(int cell, int label) const;
   void ignite_fmm(const FrontSource& s, int cell, const LocalSpeed& src, const SpeedFn& speed);
 
   int ny_, nx_;
@@ -111,6 +123,9 @@ class FireFront {
   std::vector<std::uint8_t> state_;  // 0 far, 1 trial, 2 accepted
   std::vector<std::uint8_t> fixed_;  // tentative time set exactly from a point source
   std::vector<double> tent_, arrival_;
+  std::vector<double> tau_;   // Fmm2: the factored unknown T = t0 + T0 * tau of tent_
+  std::vector<int> label_;    // Fmm2: the source whose factor T0 tau_ refers to, -1 none
+  std::vector<SourceRec> sources_;
   std::vector<Entry> heap_;
   std::vector<int> accepted_now_;
   std::vector<Step> steps_;
@@ -118,6 +133,10 @@ class FireFront {
   int stamp_id_ = 0;
   std::size_t n_trial_ = 0;
   double t_done_;
+  bool factor_on_ = true;
+  double init_radius_ = 3.0;
+  bool aniso2_ = true;
+  bool charcheck_ = true;
 };
 
 /// @brief One-shot arrival times from all sources (advance to +inf), via FireFront.
