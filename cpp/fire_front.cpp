@@ -52,6 +52,7 @@ FireFront::FireFront(int ny, int nx, double dy, double dx, FrontMethod method)
   if (const char* e = std::getenv("TB_RADIUS")) init_radius_ = std::atof(e);
   if (const char* e = std::getenv("TB_ANISO2")) aniso2_ = std::atoi(e);
   if (const char* e = std::getenv("TB_CHAR")) charcheck_ = std::atoi(e);
+  if (const char* e = std::getenv("TB_SL")) sl_on_ = std::atoi(e);
   stamp_.assign(n, 0);
   heap_.reserve(4 * static_cast<std::size_t>(ny + nx) + 64);
   if (!cellular()) return;
@@ -259,18 +260,20 @@ void FireFront::relax_cellular(int cell, const SpeedFn& speed) {
 }
 
 void FireFront::update_fmm_neighbours(int cell, const SpeedFn& speed) {
-  static const int kDr[4] = {-1, 1, 0, 0}, kDc[4] = {0, 0, -1, 1};
+  static const int kDr[8] = {-1, 1, 0, 0, -1, -1, 1, 1}, kDc[8] = {0, 0, -1, 1, -1, 1, -1, 1};
   const int r = cell / nx_, c = cell % nx_;
   const double tc = arrival_[cell];
   const double hmin = std::min(dy_, dx_);
-  for (int k = 0; k < 4; ++k) {
+  for (int k = 0; k < 8; ++k) {
     const int nr = r + kDr[k], nc = c + kDc[k];
     if (nr < 0 || nr >= ny_ || nc < 0 || nc >= nx_) continue;
     const int n = nr * nx_ + nc;
     if (!inside_[n] || state_[n] == 2) continue;
     const LocalSpeed sn = speed(n);
     if (!(sn.v > 0.0)) continue;
-    Solution sol = solve_fmm(n, sn);
+    const bool iso = (sn.e_row == 0.0 && sn.e_col == 0.0) || !sl_on_;
+    if (k >= 4 && iso) continue;  // diagonal neighbours only enter the Huygens update
+    Solution sol = iso ? solve_fmm(n, sn) : solve_huygens(n, sn);
     if (!(sol.t < kInf)) continue;
     if (sol.t < tc) {  // causality, also when the speed law changed between calls
       sol.t = tc;
@@ -420,6 +423,109 @@ FireFront::Solution FireFront::solve_fmm(int cell, const LocalSpeed& s) const {
       if (t < slot.t) slot = Solution{t, label >= 0 ? tau : t, label};
     }
   return two.t < kInf ? two : one.t < kInf ? one : loose;
+}
+
+// Update of a cell with direction-dependent speed (Huygens / semi-Lagrangian): the front
+// reaches x from a point y on the ring of its accepted 8 neighbours, T interpolated linearly
+// along each ring edge (axis to diagonal neighbour), then travels straight to x at x's
+// ellipse ray speed: T(x) = min_y T(y) + (|x - y| - e.(x - y)) / (v (1 - |e|^2)). The
+// 4-neighbour Eulerian update is not used here: for the focus ellipse the characteristic
+// often leaves the quadrant of the gradient's upwind neighbours, and that update then has no
+// causal solution. Fmm2 interpolates tau (T = t0 + T0 tau) instead of T, which makes the
+// update exact in a uniform medium.
+FireFront::Solution FireFront::solve_huygens(int cell, const LocalSpeed& s) const {
+  static const int kDr[8] = {-1, -1, 0, 1, 1, 1, 0, -1}, kDc[8] = {0, 1, 1, 1, 0, -1, -1, -1};
+  const int r = cell / nx_, c = cell % nx_;
+  const double vw = s.v * (1.0 - drive_sq(s));
+  double tv[8];
+  bool ok[8], in[8];
+  int nb[8], label = -1;
+  double tmin = kInf;
+  for (int k = 0; k < 8; ++k) {
+    const int nr = r + kDr[k], nc = c + kDc[k];
+    const bool inb = nr >= 0 && nr < ny_ && nc >= 0 && nc < nx_;
+    nb[k] = inb ? nr * nx_ + nc : -1;
+    in[k] = inb && inside_[nb[k]];
+    ok[k] = inb && state_[nb[k]] == 2;
+    tv[k] = ok[k] ? arrival_[nb[k]] : kInf;
+    if (tv[k] < tmin) {
+      tmin = tv[k];
+      label = label_[nb[k]];
+    }
+  }
+  if (method_ != FrontMethod::Fmm2 || !factor_on_) label = -1;
+  double t0 = 0.0, T0x = 0.0;
+  if (label >= 0) {
+    T0x = factor(label, cell, nullptr, nullptr);
+    t0 = sources_[label].t0;
+    if (!(T0x > 1e-9 * std::min(dy_, dx_) / sources_[label].s.v)) label = -1;
+  }
+  auto travel = [&](double my, double mx) {  // from y to x, (my, mx) = x - y in metres
+    return (std::hypot(my, mx) - (s.e_row * my + s.e_col * mx)) / vw;
+  };
+  double best = kInf;
+  for (int k = 0; k < 8; ++k) {
+    if (!ok[k]) continue;
+    if ((k & 1) && !(in[k - 1] || in[(k + 1) & 7])) continue;  // no squeezing past two holes
+    best = std::min(best, tv[k] + travel(-kDr[k] * dy_, -kDc[k] * dx_));
+  }
+  for (int k = 0; k < 8; ++k) {
+    const int ka = (k & 1) ? (k + 1) & 7 : k;  // axis end of edge (k, k+1)
+    const int kd = (k & 1) ? k : k + 1;        // diagonal end
+    if (!ok[ka] || !ok[kd]) continue;
+    // y = A + lambda q, x - y = d0 - lambda q with d0 = x - A perpendicular to q = D - A.
+    const double d0r = -kDr[ka] * dy_, d0c = -kDc[ka] * dx_;
+    const double qr = (kDr[kd] - kDr[ka]) * dy_, qc = (kDc[kd] - kDc[ka]) * dx_;
+    const double a = std::hypot(d0r, d0c), b = std::hypot(qr, qc);
+    const double eq = s.e_row * qr + s.e_col * qc;
+    // Linear T: f'(lambda) = dT + (lambda b^2 / |x - y| + e.q) / vw = 0 in closed form.
+    const double K = -(vw * (tv[kd] - tv[ka]) + eq);
+    double lam = K <= 0.0 ? 0.0 : K >= b * b / std::hypot(a, b) ? 1.0 : K * a / (b * std::sqrt(b * b - K * K));
+    if (label < 0) {
+      if (lam > 0.0 && lam < 1.0)
+        best = std::min(best, tv[ka] + lam * (tv[kd] - tv[ka]) + travel(d0r - lam * qr, d0c - lam * qc));
+      continue;
+    }
+    best = std::min(best, huygens_factored(label, nb[ka], nb[kd], a, b, d0r, d0c, qr, qc, vw, s, lam));
+  }
+  if (label < 0) return Solution{best, best, -1};
+  return Solution{best, (best - t0) / T0x, label};
+}
+
+// Minimise f(lambda) = t0 + T0(y) tau(lambda) + travel(y -> x) over the edge (tau linear) by
+// safeguarded Newton from lam (the linear-T minimiser); kInf unless the minimum is interior.
+double FireFront::huygens_factored(int label, int na, int nd, double a, double b, double d0r,
+                                   double d0c, double qr, double qc, double vw,
+                                   const LocalSpeed& s, double lam) const {
+  const SourceRec& src = sources_[label];
+  const double ua = unknown_of(na, label), dtau = unknown_of(nd, label) - ua;
+  const double yr = (na / nx_ - src.row) * dy_, yc = (na % nx_ - src.col) * dx_;  // A - source
+  const double vws = src.s.v * (1.0 - drive_sq(src.s));
+  const double eq = s.e_row * qr + s.e_col * qc, esq = src.s.e_row * qr + src.s.e_col * qc;
+  double lo = 0.0, hi = 1.0;
+  lam = std::clamp(lam, 0.0, 1.0);
+  for (int it = 0; it < 40; ++it) {
+    const double pr = yr + lam * qr, pc = yc + lam * qc;  // y - source
+    const double ny = std::hypot(pr, pc), dxy = std::hypot(a, lam * b);
+    const double pq = ny > 0.0 ? (pr * qr + pc * qc) / ny : 0.0;
+    const double T0 = (ny - (src.s.e_row * pr + src.s.e_col * pc)) / vws;
+    const double T0p = (pq - esq) / vws;
+    const double T0pp = ny > 0.0 ? (b * b - pq * pq) / ny / vws : 0.0;
+    const double tau = ua + lam * dtau;
+    const double fp = T0p * tau + T0 * dtau + (lam * b * b / dxy + eq) / vw;
+    const double fpp = T0pp * tau + 2.0 * T0p * dtau + a * a * b * b / (dxy * dxy * dxy) / vw;
+    if (fp > 0.0) hi = lam; else lo = lam;
+    double next = fpp > 0.0 ? lam - fp / fpp : 0.5 * (lo + hi);
+    if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
+    const bool done = std::abs(next - lam) < 1e-13 || hi - lo < 1e-13;
+    lam = next;
+    if (done) break;
+  }
+  if (!(lam > 0.0 && lam < 1.0)) return kInf;
+  const double pr = yr + lam * qr, pc = yc + lam * qc;
+  const double T0 = (std::hypot(pr, pc) - (src.s.e_row * pr + src.s.e_col * pc)) / vws;
+  const double mr = d0r - lam * qr, mc = d0c - lam * qc;
+  return src.t0 + T0 * (ua + lam * dtau) + (std::hypot(mr, mc) - (s.e_row * mr + s.e_col * mc)) / vw;
 }
 
 std::vector<double> arrival_times(int ny, int nx, const std::vector<double>& speed,

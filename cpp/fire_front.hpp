@@ -110,6 +110,9 @@ class FireFront {
   void relax_cellular(int cell, const SpeedFn& speed);
   void update_fmm_neighbours(int cell, const SpeedFn& speed);
   Solution solve_fmm(int cell, const LocalSpeed& s) const;
+  Solution solve_huygens(int cell, const LocalSpeed& s) const;
+  double huygens_factored(int label, int na, int nd, double a, double b, double d0r, double d0c,
+                          double qr, double qc, double vw, const LocalSpeed& s, double lam) const;
   int axis_candidates(int r, int c, int axis, bool all, int label, bool second,
                       AxisCand* out) const;
   double factor(int label, int cell, double* g_row, double* g_col) const;
@@ -137,6 +140,7 @@ class FireFront {
   double init_radius_ = 3.0;
   bool aniso2_ = true;
   bool charcheck_ = true;
+  bool sl_on_ = true;
 };
 
 /// @brief One-shot arrival times from all sources (advance to +inf), via FireFront.
