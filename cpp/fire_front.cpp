@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <climits>
-#include <cstdlib>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -13,13 +12,19 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-// Radius (in cells) of the disc around a point source whose times are set exactly. The
-// source is a singularity of T; a second-order scheme started from one cell stays first
-// order, so Fmm2 starts from a disc (docs/fire_front.md has the measurements).
-constexpr double kInitRadiusFmm1 = 1.0;
-constexpr double kInitRadiusFmm2 = 3.0;
-
 bool finite_positive(double x) { return std::isfinite(x) && x > 0.0; }
+
+// Min-heap order on (time, cell): ties go to the lower cell index, so runs are deterministic.
+struct Later {
+  template <class E>
+  bool operator()(const E& a, const E& b) const {
+    return a.t > b.t || (a.t == b.t && a.cell > b.cell);
+  }
+};
+
+// 4-neighbours first, then the diagonals.
+constexpr int kRingDr[8] = {-1, 1, 0, 0, -1, -1, 1, 1};
+constexpr int kRingDc[8] = {0, 0, -1, 1, -1, 1, -1, 1};
 
 double drive_sq(const LocalSpeed& s) { return s.e_row * s.e_row + s.e_col * s.e_col; }
 
@@ -34,12 +39,15 @@ double normal_speed(const LocalSpeed& s, double nr, double nc) {
   return s.v * (en + std::sqrt(1.0 - drive_sq(s) + en * en));
 }
 
-FireFront::FireFront(int ny, int nx, double dy, double dx, FrontMethod method)
-    : ny_(ny), nx_(nx), dy_(dy), dx_(dx), method_(method), t_done_(-kInf) {
+FireFront::FireFront(int ny, int nx, double dy, double dx, FrontMethod method,
+                     const FrontOptions& options)
+    : ny_(ny), nx_(nx), dy_(dy), dx_(dx), method_(method), opt_(options), t_done_(-kInf) {
   if (ny < 1 || nx < 1) throw std::invalid_argument("ny, nx: the grid must be at least 1 x 1");
   if (static_cast<long long>(ny) * nx > INT_MAX) throw std::invalid_argument("ny, nx: grid too large");
   if (!finite_positive(dy)) throw std::invalid_argument("dy must be finite and > 0");
   if (!finite_positive(dx)) throw std::invalid_argument("dx must be finite and > 0");
+  if (!(std::isfinite(options.init_radius) && options.init_radius >= 0.0))
+    throw std::invalid_argument("init_radius must be finite and >= 0");
   const std::size_t n = static_cast<std::size_t>(ny) * nx;
   inside_.assign(n, 1);
   state_.assign(n, 0);
@@ -48,11 +56,6 @@ FireFront::FireFront(int ny, int nx, double dy, double dx, FrontMethod method)
   arrival_.assign(n, kInf);
   tau_.assign(n, kInf);
   label_.assign(n, -1);
-  if (const char* e = std::getenv("TB_FACTOR")) factor_on_ = std::atoi(e);
-  if (const char* e = std::getenv("TB_RADIUS")) init_radius_ = std::atof(e);
-  if (const char* e = std::getenv("TB_ANISO2")) aniso2_ = std::atoi(e);
-  if (const char* e = std::getenv("TB_CHAR")) charcheck_ = std::atoi(e);
-  if (const char* e = std::getenv("TB_SL")) sl_on_ = std::atoi(e);
   stamp_.assign(n, 0);
   heap_.reserve(4 * static_cast<std::size_t>(ny + nx) + 64);
   if (!cellular()) return;
@@ -114,9 +117,7 @@ void FireFront::push(int cell, double t, double tau, int label) {
     ++n_trial_;
   }
   heap_.push_back({t, cell});
-  std::push_heap(heap_.begin(), heap_.end(), [](const Entry& a, const Entry& b) {
-    return a.t > b.t || (a.t == b.t && a.cell > b.cell);
-  });
+  std::push_heap(heap_.begin(), heap_.end(), Later());
 }
 
 void FireFront::accept(int cell, double t) {
@@ -154,14 +155,13 @@ void FireFront::ignite(const FrontSource& s, const SpeedFn& speed) {
 // from the source cell without crossing cells that cannot burn.
 void FireFront::ignite_fmm(const FrontSource& s, int cell, const LocalSpeed& src,
                            const SpeedFn& speed) {
-  const double radius = method_ == FrontMethod::Fmm1 ? kInitRadiusFmm1 : init_radius_;
+  const double radius = opt_.init_radius;
   const int label = static_cast<int>(sources_.size());
   sources_.push_back({s.row, s.col, s.t0, src});
   ++stamp_id_;
   flood_.clear();
   flood_.push_back(cell);
   stamp_[cell] = stamp_id_;
-  static const int kDr[4] = {-1, 1, 0, 0}, kDc[4] = {0, 0, -1, 1};
   for (std::size_t i = 0; i < flood_.size(); ++i) {
     const int q = flood_[i], qr = q / nx_, qc = q % nx_;
     const double t = s.t0 + factor(label, q, nullptr, nullptr);
@@ -170,7 +170,7 @@ void FireFront::ignite_fmm(const FrontSource& s, int cell, const LocalSpeed& src
       fixed_[q] = 1;
     }
     for (int k = 0; k < 4; ++k) {
-      const int nr = qr + kDr[k], nc = qc + kDc[k];
+      const int nr = qr + kRingDr[k], nc = qc + kRingDc[k];
       if (nr < 0 || nr >= ny_ || nc < 0 || nc >= nx_) continue;
       const int n = nr * nx_ + nc;
       if (stamp_[n] == stamp_id_ || !inside_[n]) continue;
@@ -209,12 +209,9 @@ double FireFront::unknown_of(int cell, int label) const {
 const std::vector<int>& FireFront::advance(double t_end, const SpeedFn& speed) {
   if (std::isnan(t_end)) throw std::invalid_argument("t_end must not be NaN");
   accepted_now_.clear();
-  auto later = [](const Entry& a, const Entry& b) {
-    return a.t > b.t || (a.t == b.t && a.cell > b.cell);
-  };
   while (!heap_.empty() && heap_.front().t <= t_end) {
     const Entry e = heap_.front();
-    std::pop_heap(heap_.begin(), heap_.end(), later);
+    std::pop_heap(heap_.begin(), heap_.end(), Later());
     heap_.pop_back();
     if (state_[e.cell] == 2 || e.t != tent_[e.cell]) continue;  // stale entry
     if (!inside_[e.cell]) {  // masked out after it entered the band
@@ -260,20 +257,19 @@ void FireFront::relax_cellular(int cell, const SpeedFn& speed) {
 }
 
 void FireFront::update_fmm_neighbours(int cell, const SpeedFn& speed) {
-  static const int kDr[8] = {-1, 1, 0, 0, -1, -1, 1, 1}, kDc[8] = {0, 0, -1, 1, -1, 1, -1, 1};
   const int r = cell / nx_, c = cell % nx_;
   const double tc = arrival_[cell];
   const double hmin = std::min(dy_, dx_);
   for (int k = 0; k < 8; ++k) {
-    const int nr = r + kDr[k], nc = c + kDc[k];
+    const int nr = r + kRingDr[k], nc = c + kRingDc[k];
     if (nr < 0 || nr >= ny_ || nc < 0 || nc >= nx_) continue;
     const int n = nr * nx_ + nc;
     if (!inside_[n] || state_[n] == 2) continue;
     const LocalSpeed sn = speed(n);
     if (!(sn.v > 0.0)) continue;
-    const bool iso = (sn.e_row == 0.0 && sn.e_col == 0.0) || !sl_on_;
-    if (k >= 4 && iso) continue;  // diagonal neighbours only enter the Huygens update
-    Solution sol = iso ? solve_fmm(n, sn) : solve_huygens(n, sn);
+    const bool huygens = opt_.huygens && (sn.e_row != 0.0 || sn.e_col != 0.0);
+    if (k >= 4 && !huygens) continue;  // diagonal neighbours only enter the Huygens update
+    Solution sol = huygens ? solve_huygens(n, sn) : solve_eikonal(n, sn);
     if (!(sol.t < kInf)) continue;
     if (sol.t < tc) {  // causality, also when the speed law changed between calls
       sol.t = tc;
@@ -324,26 +320,30 @@ int FireFront::axis_candidates(int r, int c, int axis, bool all, int label, bool
   return n_out;
 }
 
-// Solve h(grad T) = 1 at a cell, h(p) = v (e.p + sqrt((1-|e|^2)|p|^2 + (e.p)^2)), over the
-// upwind neighbour combinations; the earliest causal, upwind-consistent solution wins.
-// Fmm2 solves for tau in T = t0 + T0 tau (T0 the uniform-medium travel time from the source
-// of the earliest neighbour), so grad T = tau grad T0 + T0 grad tau is affine in tau.
-FireFront::Solution FireFront::solve_fmm(int cell, const LocalSpeed& s) const {
-  static const int kDr[4] = {-1, 1, 0, 0}, kDc[4] = {0, 0, -1, 1};
-  const int r = cell / nx_, c = cell % nx_;
+// Label (source) of the earliest accepted neighbour among the first `ring` of the 8, or -1.
+int FireFront::earliest_label(int r, int c, int ring) const {
   int label = -1;
-  if (method_ == FrontMethod::Fmm2 && factor_on_) {
-    double tmin = kInf;
-    for (int k = 0; k < 4; ++k) {
-      const int nr = r + kDr[k], nc = c + kDc[k];
-      if (nr < 0 || nr >= ny_ || nc < 0 || nc >= nx_) continue;
-      const int n = nr * nx_ + nc;
-      if (state_[n] == 2 && arrival_[n] < tmin) {
-        tmin = arrival_[n];
-        label = label_[n];
-      }
+  double tmin = kInf;
+  for (int k = 0; k < ring; ++k) {
+    const int nr = r + kRingDr[k], nc = c + kRingDc[k];
+    if (nr < 0 || nr >= ny_ || nc < 0 || nc >= nx_) continue;
+    const int n = nr * nx_ + nc;
+    if (state_[n] == 2 && arrival_[n] < tmin) {
+      tmin = arrival_[n];
+      label = label_[n];
     }
   }
+  return label;
+}
+
+// Solve h(grad T) = 1 at a cell, h(p) = v (e.p + sqrt((1-|e|^2)|p|^2 + (e.p)^2)), over the
+// upwind neighbour combinations of the 4-neighbour stencil; two-sided solutions that are
+// causal and upwind-consistent win, then one-sided ones. Fmm2 (factored) solves for tau in
+// T = t0 + T0 tau (T0 the uniform-medium travel time from the source of the earliest
+// neighbour), so grad T = tau grad T0 + T0 grad tau stays affine in the unknown.
+FireFront::Solution FireFront::solve_eikonal(int cell, const LocalSpeed& s) const {
+  const int r = cell / nx_, c = cell % nx_;
+  int label = method_ == FrontMethod::Fmm2 && opt_.factored ? earliest_label(r, c, 4) : -1;
   double t0 = 0.0, T0 = 1.0, g[2] = {0.0, 0.0};
   if (label >= 0) {
     T0 = factor(label, cell, &g[0], &g[1]);
@@ -357,7 +357,7 @@ FireFront::Solution FireFront::solve_fmm(int cell, const LocalSpeed& s) const {
   AxisCand ax[2][2];
   int n_ax[2];
   const bool all = !iso;
-  const bool second = method_ == FrontMethod::Fmm2 && (iso || aniso2_);
+  const bool second = method_ == FrontMethod::Fmm2;
   n_ax[0] = axis_candidates(r, c, 0, all, label, second, ax[0]);
   n_ax[1] = axis_candidates(r, c, 1, all, label, second, ax[1]);
   const double w = 1.0 - drive_sq(s), iv = 1.0 / s.v;
@@ -411,7 +411,7 @@ FireFront::Solution FireFront::solve_fmm(int cell, const LocalSpeed& s) const {
       // Upwind consistency: the characteristic (grad_p h, along p when isotropic) must come
       // from the side of every neighbour used.
       double gh[2] = {p[0], p[1]};
-      if (!iso && charcheck_) {
+      if (!iso) {
         const double ep = e[0] * p[0] + e[1] * p[1];
         const double S = std::sqrt(w * (p[0] * p[0] + p[1] * p[1]) + ep * ep);
         for (int k = 0; k < 2; ++k) gh[k] = e[k] + (w * p[k] + ep * e[k]) / S;
@@ -434,26 +434,22 @@ FireFront::Solution FireFront::solve_fmm(int cell, const LocalSpeed& s) const {
 // causal solution. Fmm2 interpolates tau (T = t0 + T0 tau) instead of T, which makes the
 // update exact in a uniform medium.
 FireFront::Solution FireFront::solve_huygens(int cell, const LocalSpeed& s) const {
-  static const int kDr[8] = {-1, -1, 0, 1, 1, 1, 0, -1}, kDc[8] = {0, 1, 1, 1, 0, -1, -1, -1};
+  // The ring in circular order: even k axis neighbours, odd k diagonals.
+  static const int kCircDr[8] = {-1, -1, 0, 1, 1, 1, 0, -1}, kCircDc[8] = {0, 1, 1, 1, 0, -1, -1, -1};
   const int r = cell / nx_, c = cell % nx_;
   const double vw = s.v * (1.0 - drive_sq(s));
   double tv[8];
   bool ok[8], in[8];
-  int nb[8], label = -1;
-  double tmin = kInf;
+  int nb[8];
   for (int k = 0; k < 8; ++k) {
-    const int nr = r + kDr[k], nc = c + kDc[k];
+    const int nr = r + kCircDr[k], nc = c + kCircDc[k];
     const bool inb = nr >= 0 && nr < ny_ && nc >= 0 && nc < nx_;
     nb[k] = inb ? nr * nx_ + nc : -1;
     in[k] = inb && inside_[nb[k]];
     ok[k] = inb && state_[nb[k]] == 2;
     tv[k] = ok[k] ? arrival_[nb[k]] : kInf;
-    if (tv[k] < tmin) {
-      tmin = tv[k];
-      label = label_[nb[k]];
-    }
   }
-  if (method_ != FrontMethod::Fmm2 || !factor_on_) label = -1;
+  int label = method_ == FrontMethod::Fmm2 && opt_.factored ? earliest_label(r, c, 8) : -1;
   double t0 = 0.0, T0x = 0.0;
   if (label >= 0) {
     T0x = factor(label, cell, nullptr, nullptr);
@@ -467,15 +463,15 @@ FireFront::Solution FireFront::solve_huygens(int cell, const LocalSpeed& s) cons
   for (int k = 0; k < 8; ++k) {
     if (!ok[k]) continue;
     if ((k & 1) && !(in[k - 1] || in[(k + 1) & 7])) continue;  // no squeezing past two holes
-    best = std::min(best, tv[k] + travel(-kDr[k] * dy_, -kDc[k] * dx_));
+    best = std::min(best, tv[k] + travel(-kCircDr[k] * dy_, -kCircDc[k] * dx_));
   }
   for (int k = 0; k < 8; ++k) {
     const int ka = (k & 1) ? (k + 1) & 7 : k;  // axis end of edge (k, k+1)
     const int kd = (k & 1) ? k : k + 1;        // diagonal end
     if (!ok[ka] || !ok[kd]) continue;
     // y = A + lambda q, x - y = d0 - lambda q with d0 = x - A perpendicular to q = D - A.
-    const double d0r = -kDr[ka] * dy_, d0c = -kDc[ka] * dx_;
-    const double qr = (kDr[kd] - kDr[ka]) * dy_, qc = (kDc[kd] - kDc[ka]) * dx_;
+    const double d0r = -kCircDr[ka] * dy_, d0c = -kCircDc[ka] * dx_;
+    const double qr = (kCircDr[kd] - kCircDr[ka]) * dy_, qc = (kCircDc[kd] - kCircDc[ka]) * dx_;
     const double a = std::hypot(d0r, d0c), b = std::hypot(qr, qc);
     const double eq = s.e_row * qr + s.e_col * qc;
     // Linear T: f'(lambda) = dT + (lambda b^2 / |x - y| + e.q) / vw = 0 in closed form.

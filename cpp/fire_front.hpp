@@ -42,6 +42,20 @@ struct FrontSource {
   double row, col, t0;
 };
 
+/// @brief Settings of the fast-marching methods; the defaults are the measured best
+/// (docs/fire_front.md), the others exist to reproduce the comparisons there.
+struct FrontOptions {
+  /// Cells within this distance (in cells) of a point source get exact times
+  /// t0 + distance / ray speed of the source cell. >= 0; 0 = only the nearest cell.
+  double init_radius = 1.0;
+  /// Fmm2 only: solve for tau in T = t0 + T0 tau, T0 the uniform-medium travel time from the
+  /// source (exact for uniform speed and drive; second order elsewhere).
+  bool factored = true;
+  /// Cells with a drive (|e| > 0): Huygens update on the 8-neighbour ring (true) or the
+  /// Eulerian 4-neighbour quadratic for h(grad T) = 1 (false; not causal for |e| > 0).
+  bool huygens = true;
+};
+
 /// @brief Incremental fire-front solver: ignite sources, then advance in time.
 ///
 /// Cells are accepted (ignited) in order of arrival time, ties broken by cell index, so the
@@ -49,7 +63,8 @@ struct FrontSource {
 class FireFront {
  public:
   /// @brief An empty front on an ny x nx grid with spacings dy (rows) and dx (columns) in metres.
-  FireFront(int ny, int nx, double dy, double dx, FrontMethod method);
+  FireFront(int ny, int nx, double dy, double dx, FrontMethod method,
+            const FrontOptions& options = FrontOptions());
 
   /// @brief Cells with inside==0 never burn (holes, area outside the outline). Default: all inside.
   /// @param inside ny*nx flags, row-major.
@@ -57,7 +72,8 @@ class FireFront {
 
   /// @brief Ignite a point source at time s.t0 (>= every t_end advanced to so far).
   /// Cellular methods snap it to the nearest cell; fast marching sets exact times
-  /// t0 + distance / ray speed (of the source cell) on the cells near it.
+  /// t0 + distance / ray speed (of the source cell) on the cells within
+  /// FrontOptions::init_radius of it. A source on a cell that cannot burn does nothing.
   void ignite(const FrontSource& s, const SpeedFn& speed);
 
   /// @brief Accept, in time order, every cell whose arrival time is <= t_end.
@@ -109,7 +125,8 @@ class FireFront {
   void accept(int cell, double t);
   void relax_cellular(int cell, const SpeedFn& speed);
   void update_fmm_neighbours(int cell, const SpeedFn& speed);
-  Solution solve_fmm(int cell, const LocalSpeed& s) const;
+  int earliest_label(int r, int c, int ring) const;
+  Solution solve_eikonal(int cell, const LocalSpeed& s) const;
   Solution solve_huygens(int cell, const LocalSpeed& s) const;
   double huygens_factored(int label, int na, int nd, double a, double b, double d0r, double d0c,
                           double qr, double qc, double vw, const LocalSpeed& s, double lam) const;
@@ -122,6 +139,7 @@ class FireFront {
   int ny_, nx_;
   double dy_, dx_;
   FrontMethod method_;
+  FrontOptions opt_;
   std::vector<std::uint8_t> inside_;
   std::vector<std::uint8_t> state_;  // 0 far, 1 trial, 2 accepted
   std::vector<std::uint8_t> fixed_;  // tentative time set exactly from a point source
@@ -136,11 +154,6 @@ class FireFront {
   int stamp_id_ = 0;
   std::size_t n_trial_ = 0;
   double t_done_;
-  bool factor_on_ = true;
-  double init_radius_ = 3.0;
-  bool aniso2_ = true;
-  bool charcheck_ = true;
-  bool sl_on_ = true;
 };
 
 /// @brief One-shot arrival times from all sources (advance to +inf), via FireFront.
