@@ -102,6 +102,10 @@ void FireFront::set_inside(const std::vector<std::uint8_t>& inside) {
   for (std::size_t i = 0; i < inside.size(); ++i) inside_[i] = inside[i] ? 1 : 0;
 }
 
+bool FireFront::can_burn(int cell, const SpeedFn& speed) const {
+  return inside_[cell] && speed(cell).v > 0.0;
+}
+
 bool FireFront::accepted(int cell) const {
   if (cell < 0 || static_cast<std::size_t>(cell) >= state_.size())
     throw std::invalid_argument("cell index out of range");
@@ -243,16 +247,19 @@ void FireFront::relax_cellular(int cell, const SpeedFn& speed) {
     if (nr < 0 || nr >= ny_ || nc < 0 || nc >= nx_) continue;
     const int n = nr * nx_ + nc;
     if (!inside_[n] || state_[n] == 2) continue;
-    if (st.n_pass) {
-      const bool in0 = inside_[(r + st.pass_dr[0]) * nx_ + c + st.pass_dc[0]];
-      const bool in1 = inside_[(r + st.pass_dr[1]) * nx_ + c + st.pass_dc[1]];
-      if (st.need_both ? !(in0 && in1) : !(in0 || in1)) continue;
-    }
     const LocalSpeed sn = speed(n);
     if (!(sn.v > 0.0)) continue;
     const double slowness = 0.5 * (1.0 / ray_speed(sc, st.ur, st.uc) + 1.0 / ray_speed(sn, st.ur, st.uc));
     const double t = tc + st.length * slowness;
-    if (t < tent_[n]) push(n, t, t, -1);
+    if (!(t < tent_[n])) continue;
+    if (st.n_pass) {
+      const int p0 = (r + st.pass_dr[0]) * nx_ + c + st.pass_dc[0];
+      const int p1 = (r + st.pass_dr[1]) * nx_ + c + st.pass_dc[1];
+      const bool open = st.need_both ? can_burn(p0, speed) && can_burn(p1, speed)
+                                     : can_burn(p0, speed) || can_burn(p1, speed);
+      if (!open) continue;
+    }
+    push(n, t, t, -1);
   }
 }
 
@@ -269,7 +276,7 @@ void FireFront::update_fmm_neighbours(int cell, const SpeedFn& speed) {
     if (!(sn.v > 0.0)) continue;
     const bool huygens = opt_.huygens && (sn.e_row != 0.0 || sn.e_col != 0.0);
     if (k >= 4 && !huygens) continue;  // diagonal neighbours only enter the Huygens update
-    Solution sol = huygens ? solve_huygens(n, sn) : solve_eikonal(n, sn);
+    Solution sol = huygens ? solve_huygens(n, sn, speed) : solve_eikonal(n, sn);
     if (!(sol.t < kInf)) continue;
     if (sol.t < tc) {  // causality, also when the speed law changed between calls
       sol.t = tc;
@@ -360,6 +367,17 @@ FireFront::Solution FireFront::solve_eikonal(int cell, const LocalSpeed& s) cons
   const bool second = method_ == FrontMethod::Fmm2;
   n_ax[0] = axis_candidates(r, c, 0, all, label, second, ax[0]);
   n_ax[1] = axis_candidates(r, c, 1, all, label, second, ax[1]);
+  bool factor_min[2] = {false, false};
+  if (label >= 0) {
+    for (int axis = 0; axis < 2; ++axis) {
+      factor_min[axis] = true;
+      const int lim = axis == 0 ? ny_ : nx_, pos = axis == 0 ? r : c, stride = axis == 0 ? nx_ : 1;
+      for (int side = -1; side <= 1; side += 2)
+        if (pos + side >= 0 && pos + side < lim &&
+            factor(label, cell + side * stride, nullptr, nullptr) < T0)
+          factor_min[axis] = false;
+    }
+  }
   const double w = 1.0 - drive_sq(s), iv = 1.0 / s.v;
   const double e[2] = {s.e_row, s.e_col};
   // Two-sided solutions win over one-sided ones: a one-sided update drops a derivative (of
@@ -371,10 +389,12 @@ FireFront::Solution FireFront::solve_eikonal(int cell, const LocalSpeed& s) cons
       const AxisCand* use[2] = {i >= 0 ? &ax[0][i] : nullptr, j >= 0 ? &ax[1][j] : nullptr};
       // p(tau) = P tau + Q; causality: T >= every upwind neighbour used.
       double P[2], Q[2], tlo = -kInf;
-      // A one-sided update takes dT/dx = 0 across (not dtau/dx = 0): where the two-sided one
-      // fails upwind consistency, T is near stationary across, whatever tau does.
+      // Across a one-sided update (no upwind neighbour on that axis) T is at a discrete
+      // minimum. If T0 has its minimum there too, the factor is trusted (dtau/dx = 0 across,
+      // exact near a source); otherwise the factor's slope is wrong there and dT/dx = 0 is
+      // taken, as unfactored marching does.
       for (int k = 0; k < 2; ++k) {
-        P[k] = 0.0;
+        P[k] = use[k] || !factor_min[k] ? 0.0 : g[k];
         Q[k] = 0.0;
         if (!use[k]) continue;
         P[k] = g[k] + T0 * use[k]->sigma * use[k]->c;
@@ -433,19 +453,19 @@ FireFront::Solution FireFront::solve_eikonal(int cell, const LocalSpeed& s) cons
 // often leaves the quadrant of the gradient's upwind neighbours, and that update then has no
 // causal solution. Fmm2 interpolates tau (T = t0 + T0 tau) instead of T, which makes the
 // update exact in a uniform medium.
-FireFront::Solution FireFront::solve_huygens(int cell, const LocalSpeed& s) const {
+FireFront::Solution FireFront::solve_huygens(int cell, const LocalSpeed& s,
+                                             const SpeedFn& speed) const {
   // The ring in circular order: even k axis neighbours, odd k diagonals.
   static const int kCircDr[8] = {-1, -1, 0, 1, 1, 1, 0, -1}, kCircDc[8] = {0, 1, 1, 1, 0, -1, -1, -1};
   const int r = cell / nx_, c = cell % nx_;
   const double vw = s.v * (1.0 - drive_sq(s));
   double tv[8];
-  bool ok[8], in[8];
+  bool ok[8];
   int nb[8];
   for (int k = 0; k < 8; ++k) {
     const int nr = r + kCircDr[k], nc = c + kCircDc[k];
     const bool inb = nr >= 0 && nr < ny_ && nc >= 0 && nc < nx_;
     nb[k] = inb ? nr * nx_ + nc : -1;
-    in[k] = inb && inside_[nb[k]];
     ok[k] = inb && state_[nb[k]] == 2;
     tv[k] = ok[k] ? arrival_[nb[k]] : kInf;
   }
@@ -462,7 +482,11 @@ FireFront::Solution FireFront::solve_huygens(int cell, const LocalSpeed& s) cons
   double best = kInf;
   for (int k = 0; k < 8; ++k) {
     if (!ok[k]) continue;
-    if ((k & 1) && !(in[k - 1] || in[(k + 1) & 7])) continue;  // no squeezing past two holes
+    if ((k & 1) && !ok[k - 1] && !ok[(k + 1) & 7]) {  // no squeezing past two holes
+      const bool pass = (nb[k - 1] >= 0 && can_burn(nb[k - 1], speed)) ||
+                        (nb[(k + 1) & 7] >= 0 && can_burn(nb[(k + 1) & 7], speed));
+      if (!pass) continue;
+    }
     best = std::min(best, tv[k] + travel(-kCircDr[k] * dy_, -kCircDc[k] * dx_));
   }
   for (int k = 0; k < 8; ++k) {

@@ -127,7 +127,8 @@ class FireFront {
   void update_fmm_neighbours(int cell, const SpeedFn& speed);
   int earliest_label(int r, int c, int ring) const;
   Solution solve_eikonal(int cell, const LocalSpeed& s) const;
-  Solution solve_huygens(int cell, const LocalSpeed& s) const;
+  Solution solve_huygens(int cell, const LocalSpeed& s, const SpeedFn& speed) const;
+  bool can_burn(int cell, const SpeedFn& speed) const;
   double huygens_factored(int label, int na, int nd, double a, double b, double d0r, double d0c,
                           double qr, double qc, double vw, const LocalSpeed& s, double lam) const;
   int axis_candidates(int r, int c, int axis, bool all, int label, bool second,

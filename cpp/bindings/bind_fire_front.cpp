@@ -40,8 +40,8 @@ py::array_t<double> grid_array(const std::vector<double>& v, int ny, int nx) {
 // event loop never calls back into Python and runs without the GIL.
 class PyFireFront {
  public:
-  PyFireFront(int ny, int nx, double dy, double dx, FrontMethod method)
-      : front_(ny, nx, dy, dx, method) {}
+  PyFireFront(int ny, int nx, double dy, double dx, FrontMethod method, const FrontOptions& opt)
+      : front_(ny, nx, dy, dx, method, opt) {}
 
   void set_inside(const py::array& inside) {
     const std::size_t n = cells();
@@ -125,8 +125,20 @@ void define_fire_front(py::module_& m) {
                           "Incremental fire-front solver on an ny x nx grid (spacings dy, dx in m).\n"
                           "Set the speed field (and drive) with set_speed, ignite point sources,\n"
                           "then advance in time; cells are accepted in arrival order.")
-      .def(py::init<int, int, double, double, FrontMethod>(), py::arg("ny"), py::arg("nx"),
-           py::arg("dy"), py::arg("dx"), py::arg("method"))
+      .def(py::init([](int ny, int nx, double dy, double dx, FrontMethod method,
+                       double init_radius, bool factored, bool huygens) {
+             FrontOptions opt;
+             opt.init_radius = init_radius;
+             opt.factored = factored;
+             opt.huygens = huygens;
+             return PyFireFront(ny, nx, dy, dx, method, opt);
+           }),
+           py::arg("ny"), py::arg("nx"), py::arg("dy"), py::arg("dx"), py::arg("method"),
+           py::arg("init_radius") = FrontOptions().init_radius,
+           py::arg("factored") = FrontOptions().factored, py::arg("huygens") = FrontOptions().huygens,
+           "init_radius: cells within this distance (in cells) of a source get exact times; "
+           "factored: Fmm2 solves for tau in T = t0 + T0 tau; huygens: cells with a drive use "
+           "the 8-neighbour Huygens update (else the 4-neighbour Eulerian one).")
       .def("set_inside", &PyFireFront::set_inside, py::arg("inside"),
            "Cells with inside == 0 never burn. uint8/bool array of ny*nx entries.")
       .def("set_speed", &PyFireFront::set_speed, py::arg("speed"), py::arg("e_row") = py::none(),
