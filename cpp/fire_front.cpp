@@ -28,6 +28,49 @@ constexpr int kRingDc[8] = {0, 0, -1, 1, -1, 1, -1, 1};
 
 double drive_sq(const LocalSpeed& s) { return s.e_row * s.e_row + s.e_col * s.e_col; }
 
+// Root of h(P d + pl) = 1 in d, h(p) = v (e.p + sqrt((1-|e|^2)|p|^2 + (e.p)^2)). Squaring
+// gives q(p) = w|p|^2 + 2 e.p / v - 1/v^2 = 0, a quadratic in d. Of its roots on the h = +1
+// sheet (1/v - e.p >= 0) the larger is kept: as d grows, p takes the upwind signs (the
+// smaller root, if any, has T decreasing away from a neighbour). False if there is none.
+bool eikonal_root(const double P[2], const double pl[2], const LocalSpeed& s, double* d) {
+  const double w = 1.0 - drive_sq(s), iv = 1.0 / s.v;
+  const double e[2] = {s.e_row, s.e_col};
+  const double A = w * (P[0] * P[0] + P[1] * P[1]);
+  if (!(A > 0.0)) return false;
+  const double B = 2.0 * w * (P[0] * pl[0] + P[1] * pl[1]) + 2.0 * iv * (e[0] * P[0] + e[1] * P[1]);
+  const double C = w * (pl[0] * pl[0] + pl[1] * pl[1]) + 2.0 * iv * (e[0] * pl[0] + e[1] * pl[1]) - iv * iv;
+  const double disc = B * B - 4.0 * A * C;
+  if (!(disc >= 0.0)) return false;
+  const double sq = std::sqrt(disc);
+  const double hi = B < 0.0 ? (sq - B) / (2.0 * A) : (B + sq > 0.0 ? -2.0 * C / (B + sq) : 0.0);
+  const double lo = B >= 0.0 ? -(B + sq) / (2.0 * A) : 2.0 * C / (sq - B);
+  auto on_sheet = [&](double x) {
+    return iv - (e[0] * (P[0] * x + pl[0]) + e[1] * (P[1] * x + pl[1])) >= -1e-12 * iv;
+  };
+  if (on_sheet(hi)) {
+    *d = hi;
+    return true;
+  }
+  if (on_sheet(lo)) {
+    *d = lo;
+    return true;
+  }
+  return false;
+}
+
+// The characteristic direction grad_p h(p) (along p when isotropic).
+void characteristic(const double p[2], const LocalSpeed& s, double g[2]) {
+  if (s.e_row == 0.0 && s.e_col == 0.0) {
+    g[0] = p[0], g[1] = p[1];
+    return;
+  }
+  const double w = 1.0 - drive_sq(s);
+  const double e[2] = {s.e_row, s.e_col};
+  const double ep = e[0] * p[0] + e[1] * p[1];
+  const double S = std::sqrt(w * (p[0] * p[0] + p[1] * p[1]) + ep * ep);
+  for (int k = 0; k < 2; ++k) g[k] = e[k] + (w * p[k] + ep * e[k]) / S;
+}
+
 }  // namespace
 
 double ray_speed(const LocalSpeed& s, double ur, double uc) {
@@ -343,6 +386,18 @@ int FireFront::earliest_label(int r, int c, int ring) const {
   return label;
 }
 
+// Whether T0 of `label` has a discrete minimum at the cell along each axis (T0 = its value).
+void FireFront::factor_minimum(int label, int cell, double T0, bool out[2]) const {
+  const int r = cell / nx_, c = cell % nx_;
+  for (int axis = 0; axis < 2; ++axis) {
+    out[axis] = true;
+    const int lim = axis == 0 ? ny_ : nx_, pos = axis == 0 ? r : c, stride = axis == 0 ? nx_ : 1;
+    for (int side = -1; side <= 1; side += 2)
+      if (pos + side >= 0 && pos + side < lim && factor(label, cell + side * stride, nullptr, nullptr) < T0)
+        out[axis] = false;
+  }
+}
+
 // Solve h(grad T) = 1 at a cell, h(p) = v (e.p + sqrt((1-|e|^2)|p|^2 + (e.p)^2)), over the
 // upwind neighbour combinations of the 4-neighbour stencil; two-sided solutions that are
 // causal and upwind-consistent win, then one-sided ones. Fmm2 (factored) solves for tau in
@@ -368,18 +423,7 @@ FireFront::Solution FireFront::solve_eikonal(int cell, const LocalSpeed& s) cons
   n_ax[0] = axis_candidates(r, c, 0, all, label, second, ax[0]);
   n_ax[1] = axis_candidates(r, c, 1, all, label, second, ax[1]);
   bool factor_min[2] = {false, false};
-  if (label >= 0) {
-    for (int axis = 0; axis < 2; ++axis) {
-      factor_min[axis] = true;
-      const int lim = axis == 0 ? ny_ : nx_, pos = axis == 0 ? r : c, stride = axis == 0 ? nx_ : 1;
-      for (int side = -1; side <= 1; side += 2)
-        if (pos + side >= 0 && pos + side < lim &&
-            factor(label, cell + side * stride, nullptr, nullptr) < T0)
-          factor_min[axis] = false;
-    }
-  }
-  const double w = 1.0 - drive_sq(s), iv = 1.0 / s.v;
-  const double e[2] = {s.e_row, s.e_col};
+  if (label >= 0) factor_minimum(label, cell, T0, factor_min);
   // Two-sided solutions win over one-sided ones: a one-sided update drops a derivative (of
   // tau when factored) and can then undershoot. Inconsistent solutions are the last resort.
   Solution two{kInf, kInf, label}, one{kInf, kInf, label}, loose{kInf, kInf, label};
@@ -403,39 +447,16 @@ FireFront::Solution FireFront::solve_eikonal(int cell, const LocalSpeed& s) cons
       }
       const double tau_lo = (tlo - t0) / T0;
       const double pl[2] = {P[0] * tau_lo + Q[0], P[1] * tau_lo + Q[1]};
-      // Squaring h(p) = 1 gives q(p) = w|p|^2 + 2 iv e.p - iv^2 = 0, a quadratic in tau. Of
-      // its roots on the h = +1 sheet (iv - e.p >= 0) keep the larger: as tau grows, p takes
-      // the upwind signs (the smaller root, if any, has T decreasing away from a neighbour).
-      const double A = w * (P[0] * P[0] + P[1] * P[1]);
-      if (!(A > 0.0)) continue;
-      const double B = 2.0 * w * (P[0] * pl[0] + P[1] * pl[1]) + 2.0 * iv * (e[0] * P[0] + e[1] * P[1]);
-      const double C = w * (pl[0] * pl[0] + pl[1] * pl[1]) + 2.0 * iv * (e[0] * pl[0] + e[1] * pl[1]) - iv * iv;
-      const double disc = B * B - 4.0 * A * C;
-      if (!(disc >= 0.0)) continue;
-      const double sq = std::sqrt(disc);
-      const double hi = B < 0.0 ? (sq - B) / (2.0 * A) : (B + sq > 0.0 ? -2.0 * C / (B + sq) : 0.0);
-      const double lo = B >= 0.0 ? -(B + sq) / (2.0 * A) : 2.0 * C / (sq - B);
-      auto on_sheet = [&](double d) {
-        return iv - (e[0] * (P[0] * d + pl[0]) + e[1] * (P[1] * d + pl[1])) >= -1e-12 * iv;
-      };
-      double dtau = hi;
-      if (!on_sheet(hi)) {
-        if (!on_sheet(lo)) continue;
-        dtau = lo;
-      }
+      double dtau;
+      if (!eikonal_root(P, pl, s, &dtau)) continue;
       bool ok = dtau >= 0.0;  // causal: not earlier than the neighbours used
       dtau = std::max(dtau, 0.0);
       const double tau = tau_lo + dtau;
       const double t = t0 + T0 * tau;
+      // Upwind consistency: the characteristic must come from the side of every neighbour used.
       const double p[2] = {P[0] * dtau + pl[0], P[1] * dtau + pl[1]};
-      // Upwind consistency: the characteristic (grad_p h, along p when isotropic) must come
-      // from the side of every neighbour used.
-      double gh[2] = {p[0], p[1]};
-      if (!iso) {
-        const double ep = e[0] * p[0] + e[1] * p[1];
-        const double S = std::sqrt(w * (p[0] * p[0] + p[1] * p[1]) + ep * ep);
-        for (int k = 0; k < 2; ++k) gh[k] = e[k] + (w * p[k] + ep * e[k]) / S;
-      }
+      double gh[2];
+      characteristic(p, s, gh);
       const double tol = 1e-12 * (std::abs(gh[0]) + std::abs(gh[1]));
       for (int k = 0; k < 2; ++k)
         if (use[k] && use[k]->sigma * gh[k] < -tol) ok = false;

@@ -134,6 +134,7 @@ class FireFront {
   int axis_candidates(int r, int c, int axis, bool all, int label, bool second,
                       AxisCand* out) const;
   double factor(int label, int cell, double* g_row, double* g_col) const;
+  void factor_minimum(int label, int cell, double T0, bool out[2]) const;
   double unknown_of(int cell, int label) const;
   void ignite_fmm(const FrontSource& s, int cell, const LocalSpeed& src, const SpeedFn& speed);
 
