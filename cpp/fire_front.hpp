@@ -3,7 +3,7 @@
 ///
 /// Four methods share one event loop: the paper's neighbour rule (Dijkstra on an 8- or
 /// 16-neighbour stencil) and fast marching for the eikonal equation F|grad T| = 1 (first or
-/// second order). Grid: ny rows by nx columns, cell = row*nx + col, cell centres at integer
+/// second order). Single-threaded: the loop is a priority queue. Grid: ny rows by nx columns, cell = row*nx + col, cell centres at integer
 /// (row, col), spacing dy between rows and dx between columns (metres).
 #include <cstddef>
 #include <cstdint>
@@ -19,8 +19,10 @@ using RowMatX3 = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
 /// @brief How the front moves from cell to cell.
 /// Cellular8: the paper's rule (8 neighbours), Dijkstra; octagonal fronts, up to 8.24 % late.
 /// Cellular16: the same with knight moves added; up to 2.75 % late.
-/// Fmm1: first-order fast marching. Fmm2: second-order fast marching with exact
-/// initialisation near point sources.
+/// Fmm1: first-order fast marching. Fmm2: second-order fast marching, factored at the
+/// sources (T = t0 + T0 tau): exact for uniform speed and drive, second order in smooth
+/// isotropic media, first order with a drive. With a drive (|e| > 0) both fast-marching
+/// methods use a Huygens update on the 8-neighbour ring; keep |e| <= 0.7.
 enum class FrontMethod { Cellular8, Cellular16, Fmm1, Fmm2 };
 
 /// @brief Local spread speed of a cell.
