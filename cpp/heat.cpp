@@ -12,7 +12,7 @@ namespace {
 
 using detail::KernelNode;
 
-constexpr int kLeafSize = 16;
+constexpr int kLeafSize = 32;
 constexpr int kMaxDepth = 32;
 constexpr int kStackSize = 8 * kMaxDepth + 16;  // depth-first: at most 7 siblings wait per level
 constexpr double kLowerBoundTheta = 0.5;        // opening ratio of the lower-bound pass
