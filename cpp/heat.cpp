@@ -15,7 +15,7 @@ using detail::KernelNode;
 constexpr int kLeafSize = 32;
 constexpr int kMaxDepth = 32;
 constexpr int kStackSize = 8 * kMaxDepth + 16;  // depth-first: at most 7 siblings wait per level
-constexpr double kLowerBoundTheta = 0.5;        // opening ratio of the lower-bound pass
+constexpr double kLowerBoundTheta = 2.0;        // opening ratio of the lower-bound pass (measured)
 constexpr double kPi = 3.14159265358979323846;
 
 void require(bool ok, const std::string& what) {
