@@ -137,26 +137,30 @@ void ParticleSystem::emit(const RowMatX3& pos, const RowMatX3& normal,
   for (Eigen::Index i = 0; i < k; ++i) {
     require(finite_nonneg(length(i)), "length must be finite and >= 0");
     require(normal.row(i).norm() > 1e-12, "normal must be nonzero");
+    require(params_.birth_rate * length(i) * dt < 1e15,
+            "length: birth_rate * length * dt must be < 1e15");
   }
   const std::uint64_t call = emit_calls_++;
   for (Eigen::Index i = 0; i < k; ++i) {
     const double expected = params_.birth_rate * length(i) * dt;
-    require(expected < 1e15, "length * dt * birth_rate is too large");
     const double whole = std::floor(expected);
     Stream rng(hash_key(params_.seed, kTagEmit, call, std::uint64_t(i)));
     const std::uint64_t n = std::uint64_t(whole) + (rng.uniform() < expected - whole ? 1 : 0);
     const Eigen::Vector3d p = pos.row(i).transpose();
     const Eigen::Vector3d nn = normal.row(i).transpose().normalized();
-    for (std::uint64_t j = 0; j < n; ++j) birth(p, nn, length(i));
+    for (std::uint64_t j = 0; j < n; ++j) {
+      if (count_ >= params_.capacity) {  // the rest of this emitter's births are dropped
+        next_id_ += n - j;
+        dropped_ += n - j;
+        break;
+      }
+      birth(p, nn, length(i));
+    }
   }
 }
 
 void ParticleSystem::birth(const Eigen::Vector3d& p, const Eigen::Vector3d& n, double length) {
   const std::uint64_t id = next_id_++;
-  if (count_ >= params_.capacity) {
-    ++dropped_;
-    return;
-  }
   Stream rng(hash_key(params_.seed, kTagBirth, id, 0));
   double side = n.z() >= 0.0 ? 1.0 : -1.0;
   if (std::abs(n.z()) < params_.vertical_band) side = (id & 1U) ? -1.0 : 1.0;

@@ -165,6 +165,45 @@ def test_taylor_remainder_bound_on_single_cells():
                     check_fast(cell, w, tgt, power, tol=0.99, d_min=d_min)
 
 
+def fourth_derivative_bound(r, p, d_min):
+    """M4(r) of docs/heat.md, as the C++ core computes it."""
+    v, ir = 1.0 / (r + d_min), 1.0 / r
+    g1 = p * v ** (p + 1)
+    g2 = (p + 1) * g1 * v
+    g3 = (p + 2) * g2 * v
+    g4 = (p + 3) * g3 * v
+    a, b, d = g4, 6 * g3 * ir, 3 * ir * ir * (g2 + g1 * ir)
+    return max(a, d, 0.25 * b + 0.8 * d)
+
+
+def test_fourth_derivative_bound_against_high_precision_derivatives():
+    """|d^4/dt^4 K(|x + t e|)| <= M4(|x|) for unit e, and M4 is nearly attained."""
+    mp = pytest.importorskip("mpmath")
+    mp.mp.dps = 40
+    rng = np.random.default_rng(0)
+    worst = 0.0
+    for _ in range(200):
+        p, d_min = int(rng.integers(1, 3)), 10 ** rng.uniform(-4, 0)
+        x = rng.normal(size=3)
+        x *= 10 ** rng.uniform(-2, 1) / np.linalg.norm(x)
+        e = rng.normal(size=3)
+        e /= np.linalg.norm(e)
+        if rng.random() < 0.2:  # near-perpendicular directions, where the bound is tight
+            e -= (e @ x) / (x @ x) * x * (1 - 1e-3)
+            e /= np.linalg.norm(e)
+        xm, em = [mp.mpf(float(c)) for c in x], [mp.mpf(float(c)) for c in e]
+
+        def k(t):
+            r = mp.sqrt(sum((xm[i] + t * em[i]) ** 2 for i in range(3)))
+            return (r + mp.mpf(d_min)) ** (-p)
+
+        d4 = abs(float(mp.diff(k, 0, 4)))
+        ratio = d4 / fourth_derivative_bound(float(np.linalg.norm(x)), p, d_min)
+        assert ratio <= 1 + 1e-9
+        worst = max(worst, ratio)
+    assert worst > 0.99
+
+
 @settings(max_examples=40, deadline=None)
 @given(n=st.integers(1, 300), seed=st.integers(0, 2**31), power=st.sampled_from([1, 2]),
        scale=st.sampled_from([1e-3, 1.0, 1e3]), tol=st.sampled_from([0.5, 0.01, 1e-4]))

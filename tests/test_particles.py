@@ -175,6 +175,15 @@ def test_full_pool_drops_new_births_and_counts_them():
     assert ps.count == 10 and ps.dropped == 30
 
 
+def test_huge_birth_counts_are_counted_not_looped():
+    ps = ParticleSystem(capacity=5, birth_rate=1e12)
+    ps.emit(ORIGIN, UP, [1.0], 1.0)  # 1e12 expected births, exactly
+    assert ps.count == 5 and ps.dropped == 10**12 - 5
+    with pytest.raises(ValueError, match="length"):
+        ps.emit(ORIGIN, UP, [1e4], 1.0)  # 1e16 expected: refused before any change
+    assert ps.count == 5 and ps.dropped == 10**12 - 5
+
+
 def test_survivors_do_not_depend_on_the_pool_size():
     out = {}
     for cap in (7, 1000):
