@@ -3,9 +3,10 @@
 ///
 /// Both are S(y) = sum_i w_i K(|y - x_i|) with K(d) = (d + d_min)^-p, w_i >= 0: p = 2 for the
 /// heat of fire particles, p = 1 for the pyrolysis of ignition points. The fast method is a
-/// Barnes-Hut octree with a monopole-plus-quadrupole expansion about each cell's weighted
-/// centroid, opened so that every target's sum is within `tolerance` relative error of the
-/// direct sum (a proven bound, see docs/heat.md).
+/// Barnes-Hut octree with a third-order Taylor expansion (weight, second and third moments)
+/// about each cell's weighted centroid and a fourth-order remainder bound, opened so that
+/// every target's sum is within `tolerance` relative error of the direct sum (a proven
+/// bound, see docs/heat.md).
 #include <Eigen/Core>
 
 #include <cstdint>
