@@ -6,4 +6,6 @@ PYBIND11_MODULE(_core, m) {
   thinburn::bind::define_threads(m);
   thinburn::bind::define_fire_front(m);
   thinburn::bind::define_simulation(m);
+  thinburn::bind::define_particles(m);
+  thinburn::bind::define_heat(m);
 }
