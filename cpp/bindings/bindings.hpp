@@ -3,4 +3,6 @@
 
 namespace thinburn::bind {
 void define_threads(pybind11::module_& m);
+void define_lattice(pybind11::module_& m);
+void define_dynamics(pybind11::module_& m);
 }  // namespace thinburn::bind

@@ -4,4 +4,6 @@
 PYBIND11_MODULE(_core, m) {
   m.doc() = "thinburn C++ core";
   thinburn::bind::define_threads(m);
+  thinburn::bind::define_lattice(m);
+  thinburn::bind::define_dynamics(m);
 }
