@@ -3,6 +3,7 @@
 /// vertex: a couple whose rotation D grows by delta turns its axis neighbours about a line
 /// through its centre by delta, each vertex along the chord AB, |AB| = 2 r sin(|delta| / 2).
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 #include <cstdint>
 #include <vector>

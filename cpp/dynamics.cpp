@@ -6,6 +6,9 @@
 #include <stdexcept>
 #include <string>
 
+#include <Eigen/Geometry>
+#include <Eigen/LU>
+
 #include "crumple.hpp"
 #include "threads.hpp"
 

@@ -44,7 +44,7 @@ struct DynamicsParams {
   int max_substeps = 10000;    ///< explicit steps needing more throw std::runtime_error
   double safety = 0.9;         ///< explicit substep h = safety * (theoretical stability limit)
   double max_stretch = 0.25;   ///< implicit: largest relative change of a spring per substep
-  double cg_tolerance = 1e-10; ///< relative residual of the conjugate gradients
+  double cg_tolerance = 1e-8;  ///< relative residual of the conjugate gradients
   int cg_max_iterations = 2000;
 };
 
