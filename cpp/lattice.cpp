@@ -86,7 +86,7 @@ Embedding FfdLattice::embed(const RowMatX3& params, const RowMatX3& rest_points,
   e.couple.assign(std::size_t(n) * e.stencil, 0);
   e.weight.assign(std::size_t(n) * e.stencil, 0.0);
   e.r.resize(n);
-  e.residual.resize(n, 3);
+  e.rest = rest_points;
   const double hi = M_ - 1;
   for (Eigen::Index p = 0; p < n; ++p) {
     const double s = checked_param(params(p, 0), hi, "s", p);
@@ -94,17 +94,13 @@ Embedding FfdLattice::embed(const RowMatX3& params, const RowMatX3& rest_points,
     e.r(p) = checked_param(params(p, 2), 1.0, "r", p);
     const Axis1D ai = spline ? bspline_axis(s, M_) : linear_axis(s, M_);
     const Axis1D aj = spline ? bspline_axis(t, M_) : linear_axis(t, M_);
-    Eigen::RowVector3d interp_rest = Eigen::RowVector3d::Zero();
     for (int a = 0; a < side; ++a)
       for (int b = 0; b < side; ++b) {
         const std::size_t slot = std::size_t(p) * e.stencil + a * side + b;
         const int couple = (ai.base + a) * M_ + (aj.base + b);
         e.couple[slot] = couple;
         e.weight[slot] = ai.w[a] * aj.w[b];
-        interp_rest += e.weight[slot] *
-                       ((1.0 - e.r(p)) * rest_.row(2 * couple) + e.r(p) * rest_.row(2 * couple + 1));
       }
-    e.residual.row(p) = rest_points.row(p) - interp_rest;
   }
   return e;
 }
@@ -122,13 +118,15 @@ void FfdLattice::deform(const Embedding& e, Eigen::Ref<RowMatX3> out) const {
 #endif
   for (Eigen::Index p = 0; p < n; ++p) {
     const double r = e.r(p);
-    Eigen::RowVector3d acc = e.residual.row(p);
+    // Displacements, not positions, are interpolated: at rest every term is exactly zero.
+    Eigen::RowVector3d disp = Eigen::RowVector3d::Zero();
     for (int q = 0; q < st; ++q) {
       const std::size_t slot = std::size_t(p) * st + q;
       const int c = e.couple[slot];
-      acc += e.weight[slot] * ((1.0 - r) * pos_.row(2 * c) + r * pos_.row(2 * c + 1));
+      disp += e.weight[slot] * ((1.0 - r) * (pos_.row(2 * c) - rest_.row(2 * c)) +
+                                r * (pos_.row(2 * c + 1) - rest_.row(2 * c + 1)));
     }
-    out.row(p) = acc;
+    out.row(p) = e.rest.row(p) + disp;
   }
 }
 

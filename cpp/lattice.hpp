@@ -22,13 +22,13 @@ enum class LatticeInterp {
 };
 
 /// @brief Points embedded in a lattice: per point a stencil of couples with in-plane weights,
-/// the weight of the top layer and the rest residual.
+/// the weight of the top layer and the rest position.
 struct Embedding {
   int stencil = 4;                ///< couples per point: 4 (trilinear) or 9 (B-spline)
   std::vector<std::int32_t> couple;  ///< n * stencil couple indices (i * M + j)
   std::vector<double> weight;     ///< n * stencil in-plane weights, each point's sum to 1
   Eigen::VectorXd r;              ///< n: weight of the top vertex of each couple (1 - r: bottom)
-  RowMatX3 residual;              ///< n x 3: rest point minus the interpolation of the rest lattice
+  RowMatX3 rest;                  ///< n x 3: rest positions of the points
   /// @brief Number of embedded points.
   Eigen::Index size() const { return r.size(); }
 };

@@ -36,13 +36,12 @@ py::array_t<double> weights_of(const Embedding& e) {
 void define_lattice(py::module_& m) {
   py::class_<Embedding>(m, "Embedding",
                         "Points embedded in a lattice: per point a stencil of couples with in-plane "
-                        "weights, the weight of the top layer and the rest residual.")
+                        "weights, the weight of the top layer and the rest positions.")
       .def_readonly("stencil", &Embedding::stencil, "Couples per point: 4 (trilinear) or 9 (B-spline).")
       .def_property_readonly("couples", &couples_of, "n x stencil couple indices (i * M + j).")
       .def_property_readonly("weights", &weights_of, "n x stencil in-plane weights (rows sum to 1).")
       .def_readonly("r", &Embedding::r, "Per point: weight of the top vertex of each couple.")
-      .def_readonly("residual", &Embedding::residual,
-                    "n x 3: rest point minus the interpolation of the rest lattice.")
+      .def_readonly("rest", &Embedding::rest, "n x 3: rest positions of the points.")
       .def("__len__", &Embedding::size);
 
   py::class_<FfdLattice>(m, "FfdLattice",
