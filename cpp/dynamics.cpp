@@ -84,6 +84,7 @@ void validate(const DynamicsParams& p) {
   nonneg(p.k_shear, "k_shear");
   nonneg(p.k_flex, "k_flex");
   nonneg(p.k_thickness, "k_thickness");
+  nonneg(p.k_transverse, "k_transverse");
   nonneg(p.stiffness_unit, "stiffness_unit");
   nonneg(p.c_damping, "c_damping");
   nonneg(p.wind_drag, "wind_drag");
@@ -121,6 +122,7 @@ LatticeDynamics::LatticeDynamics(FfdLattice& lattice, const DynamicsParams& p)
   list_.reserve(n_);
   slot_.assign(n_, -1);
   active_.reserve(n_);
+  contact_ = Eigen::VectorXd::Constant(n_, -1.0);
 }
 
 void LatticeDynamics::build_springs() {
@@ -144,16 +146,18 @@ void LatticeDynamics::build_springs() {
         if (j + 2 < M) add(v, lat_.index(i, j + 2, k), 2);
         if (i + 2 < M) add(v, lat_.index(i + 2, j, k), 2);
       }
+  vert_spring_.assign(M * M, 0);
   for (int i = 0; i < M; ++i)
     for (int j = 0; j < M; ++j) {
+      vert_spring_[i * M + j] = static_cast<int>(sa_.size());
       add(lat_.index(i, j, 0), lat_.index(i, j, 1), 3);
       if (j + 1 < M) {
-        add(lat_.index(i, j, 0), lat_.index(i, j + 1, 1), 3);
-        add(lat_.index(i, j, 1), lat_.index(i, j + 1, 0), 3);
+        add(lat_.index(i, j, 0), lat_.index(i, j + 1, 1), 4);
+        add(lat_.index(i, j, 1), lat_.index(i, j + 1, 0), 4);
       }
       if (i + 1 < M) {
-        add(lat_.index(i, j, 0), lat_.index(i + 1, j, 1), 3);
-        add(lat_.index(i, j, 1), lat_.index(i + 1, j, 0), 3);
+        add(lat_.index(i, j, 0), lat_.index(i + 1, j, 1), 4);
+        add(lat_.index(i, j, 1), lat_.index(i + 1, j, 0), 4);
       }
     }
   const int ns = static_cast<int>(sa_.size());
@@ -172,16 +176,16 @@ void LatticeDynamics::build_springs() {
     inc_spring_[fill[sb_[s]]] = s;
     inc_other_[fill[sb_[s]]++] = sa_[s];
   }
-  // Buffers of the solver: 6 per spring (Jacobian blocks), 18 per vertex (diagonal blocks and
-  // their inverses),
+  // Buffers of the solver: 6 per spring (Jacobian blocks), 27 per vertex (diagonal block and
+  // the two blocks of its row of the couple-block preconditioner),
   // 3 per vertex for each of the CG vectors and the forces, and the dot-product partials.
-  work_.assign(6 * std::size_t(ns) + 18 * std::size_t(n_) + 7 * 3 * std::size_t(n_) +
+  work_.assign(6 * std::size_t(ns) + 27 * std::size_t(n_) + 7 * 3 * std::size_t(n_) +
                    (3 * std::size_t(n_)) / kDotChunk + 2,
                0.0);
 }
 
 double LatticeDynamics::spring_k(int s) const {
-  const double c[4] = {p_.k_structure, p_.k_shear, p_.k_flex, p_.k_thickness};
+  const double c[5] = {p_.k_structure, p_.k_shear, p_.k_flex, p_.k_thickness, p_.k_transverse};
   return c[kind_[s]] * p_.stiffness_unit;
 }
 
@@ -190,7 +194,8 @@ void LatticeDynamics::set_params(const DynamicsParams& p) {
   const DynamicsParams& o = p_;
   const bool moved =
       o.k_structure != p.k_structure || o.k_shear != p.k_shear || o.k_flex != p.k_flex ||
-      o.k_thickness != p.k_thickness || o.stiffness_unit != p.stiffness_unit ||
+      o.k_thickness != p.k_thickness || o.k_transverse != p.k_transverse ||
+      o.stiffness_unit != p.stiffness_unit ||
       o.c_damping != p.c_damping || o.gravity != p.gravity || o.buoyancy != p.buoyancy ||
       o.wind_drag != p.wind_drag || o.has_floor != p.has_floor || o.floor_z != p.floor_z ||
       o.friction != p.friction || o.integrator != p.integrator || o.sleeping != p.sleeping ||
@@ -347,7 +352,7 @@ double LatticeDynamics::max_damping_rate() const {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Work buffers: [jacobian blocks 6/spring | diagonal blocks 9/vertex | their inverses 9/vertex |
+// Work buffers: [jacobian blocks 6/spring | diagonal blocks 9/vertex | preconditioner 18/vertex |
 // f, b, dv, r, z, p, Ap: 3/vertex each | dot partials].
 namespace {
 struct Buffers {
@@ -361,7 +366,7 @@ Buffers buffers(std::vector<double>& w, std::size_t ns, std::size_t n) {
   B.diag = q;
   q += 9 * n;
   B.pinv = q;
-  q += 9 * n;
+  q += 18 * n;
   double** vecs[7] = {&B.f, &B.b, &B.dv, &B.r, &B.z, &B.p, &B.Ap};
   for (double** v : vecs) {
     *v = q;
@@ -521,11 +526,10 @@ void LatticeDynamics::explicit_substep(double h, bool paper) {
   }
 }
 
-int LatticeDynamics::implicit_substep(double h) {
+void LatticeDynamics::implicit_assemble(double h) {
   Buffers B = buffers(work_, sa_.size(), n_);
-  RowMatX3& x = lat_.positions();
+  const RowMatX3& x = lat_.positions();
   const int na = static_cast<int>(active_.size());
-  const int N = 3 * na;
   const double h2 = h * h;
   // Jacobian blocks (clamped to positive semidefinite) of springs touching active vertices;
   // each spring is computed by its smallest-index active endpoint.
@@ -541,13 +545,24 @@ int LatticeDynamics::implicit_substep(double h) {
       store_sym(B.jac + 6 * s, spring_block(d, spring_k(s), rest_len_[s], true));
     }
   }
-  // Right-hand side h (f + h K w), w = v + drift, and the 3x3 diagonal blocks of
+  // Floor contact: a vertex on the floor that would move into it keeps v_z = 0 in this substep
+  // (a filtered DOF of the conjugate gradients) and the crumple cannot push it down.
+  // Right-hand side h (f + h K w), w = v + drift, and the diagonal blocks of
   // A = M (1 + h c) + h W + h^2 J.
 #ifdef THINBURN_HAVE_OPENMP
 #pragma omp parallel for num_threads(thinburn::num_threads()) schedule(static) if (na > kParallelMin)
 #endif
   for (int a = 0; a < na; ++a) {
     const int v = active_[a];
+    const Eigen::Vector3d f = vertex_force(v, x, vel_);
+    contact_(v) = -1.0;
+    if (p_.has_floor && x(v, 2) <= p_.floor_z) {
+      const double vz_free = vel_(v, 2) + h * f.z() / mass_(v);
+      if (vz_free <= 0.0) {
+        contact_(v) = -vz_free;
+        drift_(v, 2) = std::max(drift_(v, 2), 0.0);
+      }
+    }
     const Eigen::Vector3d wv = (vel_.row(v) + drift_.row(v)).transpose();
     Eigen::Vector3d Kw = Eigen::Vector3d::Zero();
     Eigen::Matrix3d D = mass_(v) * (1.0 + h * p_.c_damping) * Eigen::Matrix3d::Identity();
@@ -561,57 +576,111 @@ int LatticeDynamics::implicit_substep(double h) {
       Kw -= J * (wv - (vel_.row(o) + drift_.row(o)).transpose());
       D += h2 * J;
     }
-    vec3(B.b, a) = h * (vertex_force(v, x, vel_) + h * Kw);
+    vec3(B.b, a) = h * (f + h * Kw);
     mat3(B.diag, a) = D;
-    mat3(B.pinv, a) = D.inverse();
   }
-  auto apply_A = [&](const double* in, double* out) {
+  // Couple-block Jacobi: the top-bottom spring is the stiffest, so both vertices of a couple are
+  // inverted together (6 x 6); a vertex whose partner is not active gets its 3 x 3 inverse.
 #ifdef THINBURN_HAVE_OPENMP
 #pragma omp parallel for num_threads(thinburn::num_threads()) schedule(static) if (na > kParallelMin)
 #endif
-    for (int a = 0; a < na; ++a) {
-      const int v = active_[a];
-      Eigen::Vector3d y = mat3(B.diag, a) * Eigen::Map<const Eigen::Vector3d>(in + 3 * a);
-      for (int q = inc_start_[v]; q < inc_start_[v + 1]; ++q) {
-        const int so = slot_[inc_other_[q]];
-        if (so >= 0)
-          y -= h2 * load_sym(B.jac + 6 * inc_spring_[q]) *
-               Eigen::Map<const Eigen::Vector3d>(in + 3 * so);
-      }
-      vec3(out, a) = y;
+  for (int a = 0; a < na; ++a) {
+    const int v = active_[a], pa = slot_[v ^ 1];
+    if (pa < 0) {
+      mat3(B.pinv, 2 * a) = mat3(B.diag, a).inverse();
+      mat3(B.pinv, 2 * a + 1).setZero();
+      continue;
     }
-  };
-  auto precondition = [&](const double* in, double* out) {
+    Eigen::Matrix<double, 6, 6> C;
+    const Eigen::Matrix3d J = load_sym(B.jac + 6 * vert_spring_[v / 2]);
+    C.topLeftCorner<3, 3>() = mat3(B.diag, a);
+    C.bottomRightCorner<3, 3>() = mat3(B.diag, pa);
+    C.topRightCorner<3, 3>() = -h2 * J;
+    C.bottomLeftCorner<3, 3>() = -h2 * J;
+    const Eigen::Matrix<double, 6, 6> Ci = C.inverse();
+    mat3(B.pinv, 2 * a) = Ci.topLeftCorner<3, 3>();
+    mat3(B.pinv, 2 * a + 1) = Ci.topRightCorner<3, 3>();
+  }
+}
+
+void LatticeDynamics::apply_A(double h, const double* in, double* out) {
+  Buffers B = buffers(work_, sa_.size(), n_);
+  const int na = static_cast<int>(active_.size());
+  const double h2 = h * h;
 #ifdef THINBURN_HAVE_OPENMP
 #pragma omp parallel for num_threads(thinburn::num_threads()) schedule(static) if (na > kParallelMin)
 #endif
-    for (int a = 0; a < na; ++a)
-      vec3(out, a) = mat3(B.pinv, a) * Eigen::Map<const Eigen::Vector3d>(in + 3 * a);
-  };
+  for (int a = 0; a < na; ++a) {
+    const int v = active_[a];
+    Eigen::Vector3d y = mat3(B.diag, a) * Eigen::Map<const Eigen::Vector3d>(in + 3 * a);
+    for (int q = inc_start_[v]; q < inc_start_[v + 1]; ++q) {
+      const int so = slot_[inc_other_[q]];
+      if (so >= 0)
+        y -= h2 * load_sym(B.jac + 6 * inc_spring_[q]) * Eigen::Map<const Eigen::Vector3d>(in + 3 * so);
+    }
+    vec3(out, a) = y;
+  }
+}
+
+void LatticeDynamics::precondition(const double* in, double* out) {
+  Buffers B = buffers(work_, sa_.size(), n_);
+  const int na = static_cast<int>(active_.size());
+#ifdef THINBURN_HAVE_OPENMP
+#pragma omp parallel for num_threads(thinburn::num_threads()) schedule(static) if (na > kParallelMin)
+#endif
+  for (int a = 0; a < na; ++a) {
+    const int v = active_[a], pa = slot_[v ^ 1];
+    Eigen::Vector3d y = mat3(B.pinv, 2 * a) * Eigen::Map<const Eigen::Vector3d>(in + 3 * a);
+    if (pa >= 0) y += mat3(B.pinv, 2 * a + 1) * Eigen::Map<const Eigen::Vector3d>(in + 3 * pa);
+    if (contact_(v) >= 0.0) y.z() = 0.0;  // the filter of Baraff and Witkin's modified PCG
+    vec3(out, a) = y;
+  }
+}
+
+int LatticeDynamics::implicit_substep(double h) {
+  implicit_assemble(h);
+  Buffers B = buffers(work_, sa_.size(), n_);
+  RowMatX3& x = lat_.positions();
+  const int na = static_cast<int>(active_.size());
+  const int N = 3 * na;
   auto axpy = [&](double alpha, const double* xv, double* y) {  // y += alpha x
 #ifdef THINBURN_HAVE_OPENMP
 #pragma omp parallel for num_threads(thinburn::num_threads()) schedule(static) if (N > 3 * kParallelMin)
 #endif
     for (int i = 0; i < N; ++i) y[i] += alpha * xv[i];
   };
-  // Preconditioned conjugate gradients from dv = 0.
-  std::fill(B.dv, B.dv + N, 0.0);
-  int iterations = 0;
-  const double bnorm = std::sqrt(det_dot(B.b, B.b, N, B.partial));
-  if (bnorm > 0.0) {
+  // Modified PCG (Baraff and Witkin 1998): constrained DOFs start at their prescribed value
+  // (v_z -> 0) and every search direction is filtered to leave them there.
+  int constrained = 0;
+  for (int a = 0; a < na; ++a) {
+    const bool c = contact_(active_[a]) >= 0.0;
+    constrained += c;
+    vec3(B.dv, a) = Eigen::Vector3d(0.0, 0.0, c ? -vel_(active_[a], 2) : 0.0);
+  }
+  if (constrained > 0) {
+    apply_A(h, B.dv, B.Ap);
+    for (int i = 0; i < N; ++i) B.r[i] = B.b[i] - B.Ap[i];
+  } else {
     std::copy(B.b, B.b + N, B.r);
-    precondition(B.r, B.z);
-    std::copy(B.z, B.z + N, B.p);
-    double rz = det_dot(B.r, B.z, N, B.partial);
+  }
+  for (int a = 0; a < na; ++a)
+    if (contact_(active_[a]) >= 0.0) B.r[3 * a + 2] = 0.0;
+  int iterations = 0;
+  const double rnorm0 = std::sqrt(det_dot(B.r, B.r, N, B.partial));
+  if (rnorm0 > 0.0) {
+    precondition(B.r, B.p);
+    double rz = det_dot(B.r, B.p, N, B.partial);
     while (iterations < p_.cg_max_iterations) {
       ++iterations;
-      apply_A(B.p, B.Ap);
+      apply_A(h, B.p, B.Ap);
+      for (int a = 0; a < na; ++a)
+        if (contact_(active_[a]) >= 0.0) B.Ap[3 * a + 2] = 0.0;
       const double pAp = det_dot(B.p, B.Ap, N, B.partial);
       if (!(pAp > 0.0)) break;
       const double alpha = rz / pAp;
       axpy(alpha, B.p, B.dv);
       axpy(-alpha, B.Ap, B.r);
-      if (std::sqrt(det_dot(B.r, B.r, N, B.partial)) <= p_.cg_tolerance * bnorm) break;
+      if (std::sqrt(det_dot(B.r, B.r, N, B.partial)) <= p_.cg_tolerance * rnorm0) break;
       precondition(B.r, B.z);
       const double rz_new = det_dot(B.r, B.z, N, B.partial);
       const double beta = rz_new / rz;
@@ -636,11 +705,18 @@ int LatticeDynamics::implicit_substep(double h) {
 void LatticeDynamics::apply_floor(double h) {
   if (!p_.has_floor) return;
   RowMatX3& x = lat_.positions();
+  const bool implicit = p_.integrator == Integrator::Implicit;
   for (int v : active_) {
-    if (!(x(v, 2) < p_.floor_z)) continue;
-    const double removed = std::max(0.0, -vel_(v, 2));
-    x(v, 2) = p_.floor_z;
-    vel_(v, 2) = std::max(0.0, vel_(v, 2));
+    // Coulomb friction: the tangential speed drops by friction times the normal speed the
+    // floor removed (from the contact filter, or from the projection below).
+    double removed = -1.0;
+    if (implicit && contact_(v) >= 0.0) removed = contact_(v);
+    if (x(v, 2) < p_.floor_z) {
+      removed = std::max(0.0, -vel_(v, 2));
+      x(v, 2) = p_.floor_z;
+      vel_(v, 2) = std::max(0.0, vel_(v, 2));
+    }
+    if (removed < 0.0) continue;
     const double t = std::hypot(vel_(v, 0), vel_(v, 1));
     const double keep = t > p_.friction * removed ? (t - p_.friction * removed) / t : 0.0;
     vel_(v, 0) *= keep;

@@ -26,7 +26,8 @@ struct DynamicsParams {
   double k_structure = 0.05;   ///< Table 1 coefficient of the axis-neighbour springs (per layer)
   double k_shear = 0.05;       ///< Table 1 coefficient of the diagonal springs (per layer)
   double k_flex = 0.05;        ///< Table 1 coefficient of the two-apart springs (per layer)
-  double k_thickness = 1.0;    ///< coefficient of the through-thickness springs
+  double k_thickness = 1.0;    ///< coefficient of the top-bottom spring of each couple
+  double k_transverse = 0.05;  ///< coefficient of the diagonals between adjacent couples' top and bottom
   double stiffness_unit = 1000.0;  ///< N/m per unit coefficient: spring k = coefficient * unit
   double c_damping = 1.7;      ///< 1/s, eq 12 per kilogram: F = -c_damping * m * v
   Eigen::Vector3d gravity{0.0, 0.0, -9.81};  ///< m/s^2
@@ -111,7 +112,8 @@ class LatticeDynamics {
   const std::vector<double>& rest_lengths() const { return rest_len_; }
   /// @brief Spring endpoints, (springs) x 2.
   Eigen::Matrix<int, Eigen::Dynamic, 2, Eigen::RowMajor> spring_pairs() const;
-  /// @brief Spring kind per spring: 0 structure, 1 shear, 2 flex, 3 thickness.
+  /// @brief Spring kind per spring: 0 structure, 1 shear, 2 flex, 3 thickness (top-bottom of a
+  /// couple), 4 transverse (top-bottom diagonals between adjacent couples).
   const std::vector<std::uint8_t>& spring_kinds() const { return kind_; }
 
  private:
@@ -127,6 +129,9 @@ class LatticeDynamics {
   double max_damping_rate() const;
   void explicit_substep(double h, bool paper);
   int implicit_substep(double h);
+  void implicit_assemble(double h);
+  void apply_A(double h, const double* in, double* out);
+  void precondition(const double* in, double* out);
   void apply_floor(double h);
   void apply_plasticity();
   bool wake_stressed_sleepers(double dt);
@@ -142,6 +147,8 @@ class LatticeDynamics {
   std::vector<std::uint8_t> kind_;
   std::vector<double> rest_len_;
   std::vector<int> inc_start_, inc_spring_, inc_other_;
+  std::vector<int> vert_spring_;    // per couple: its top-bottom spring
+  Eigen::VectorXd contact_;         // per vertex: floor impulse per mass of this substep, -1 if free
   RowMatX3 vel_, drift_, disp_;
   Eigen::VectorXd mass_, area_, heat_, heat_prev_, D_prev_, delta_;
   Eigen::Vector3d wind_{0, 0, 0};

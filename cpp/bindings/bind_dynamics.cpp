@@ -52,6 +52,7 @@ void apply_kwargs(DynamicsParams& p, const py::kwargs& kw) {
                      : k == "k_shear"        ? &p.k_shear
                      : k == "k_flex"         ? &p.k_flex
                      : k == "k_thickness"    ? &p.k_thickness
+                     : k == "k_transverse"   ? &p.k_transverse
                      : k == "stiffness_unit" ? &p.stiffness_unit
                      : k == "c_damping"      ? &p.c_damping
                      : k == "buoyancy"       ? &p.buoyancy
@@ -91,7 +92,8 @@ void apply_kwargs(DynamicsParams& p, const py::kwargs& kw) {
 py::dict params_dict(const DynamicsParams& p) {
   const char* names[] = {"explicit", "symplectic", "implicit"};
   return py::dict("k_structure"_a = p.k_structure, "k_shear"_a = p.k_shear, "k_flex"_a = p.k_flex,
-                  "k_thickness"_a = p.k_thickness, "stiffness_unit"_a = p.stiffness_unit,
+                  "k_thickness"_a = p.k_thickness, "k_transverse"_a = p.k_transverse,
+                  "stiffness_unit"_a = p.stiffness_unit,
                   "c_damping"_a = p.c_damping,
                   "gravity"_a = py::make_tuple(p.gravity.x(), p.gravity.y(), p.gravity.z()),
                   "buoyancy"_a = p.buoyancy, "wind_drag"_a = p.wind_drag,
@@ -202,7 +204,7 @@ void define_dynamics(py::module_& m) {
         py::array_t<std::uint8_t> out(k.size());
         std::copy(k.begin(), k.end(), out.mutable_data());
         return out;
-      }, "0 structure, 1 shear, 2 flex, 3 thickness.");
+      }, "0 structure, 1 shear, 2 flex, 3 thickness (top-bottom), 4 transverse (diagonals).");
 
   m.def(
       "explicit_stability_limit",
