@@ -16,7 +16,7 @@ namespace thinburn {
 namespace {
 
 constexpr int kDotChunk = 4096;
-constexpr int kParallelMin = 2048;  // below this many items a loop runs on one thread
+constexpr int kParallelMin = 1024;  // below this many items a loop runs on one thread
 constexpr int kMaxPasses = 4;
 
 void require(bool ok, const std::string& what) {
