@@ -101,6 +101,7 @@ void validate(const DynamicsParams& p) {
   require(p.max_stretch > 0.0 && std::isfinite(p.max_stretch), "max_stretch must be > 0");
   require(p.cg_tolerance > 0.0 && p.cg_tolerance < 1.0, "cg_tolerance must be in (0, 1)");
   require(p.cg_max_iterations >= 1, "cg_max_iterations must be >= 1");
+  nonneg(p.cg_velocity_tolerance, "cg_velocity_tolerance");
 }
 
 LatticeDynamics::LatticeDynamics(FfdLattice& lattice, const DynamicsParams& p)
@@ -108,6 +109,7 @@ LatticeDynamics::LatticeDynamics(FfdLattice& lattice, const DynamicsParams& p)
   validate(p);
   build_springs();
   vel_ = RowMatX3::Zero(n_, 3);
+  accel_ = RowMatX3::Zero(n_, 3);
   drift_ = RowMatX3::Zero(n_, 3);
   disp_ = RowMatX3::Zero(n_, 3);
   x_save_ = RowMatX3::Zero(n_, 3);
@@ -249,6 +251,7 @@ void LatticeDynamics::set_state(const RowMatX3& x, const RowMatX3& v) {
   require(v.rows() == n_ && v.allFinite(), "velocities must be finite, 2*M*M x 3");
   lat_.positions() = x;
   vel_ = v;
+  accel_.setZero();
   for (int q = 0; q < n_; ++q)
     if (pinned_[q]) vel_.row(q).setZero();
   std::fill(awake_.begin(), awake_.end(), 1);
@@ -651,23 +654,28 @@ int LatticeDynamics::implicit_substep(double h) {
   };
   // Modified PCG (Baraff and Witkin 1998): constrained DOFs start at their prescribed value
   // (v_z -> 0) and every search direction is filtered to leave them there.
-  int constrained = 0;
+  // Warm start from the previous substep's acceleration (a smooth motion changes it little);
+  // constrained DOFs start at their prescribed value.
   for (int a = 0; a < na; ++a) {
-    const bool c = contact_(active_[a]) >= 0.0;
-    constrained += c;
-    vec3(B.dv, a) = Eigen::Vector3d(0.0, 0.0, c ? -vel_(active_[a], 2) : 0.0);
+    const int v = active_[a];
+    Eigen::Vector3d d0 = h * accel_.row(v).transpose();
+    if (contact_(v) >= 0.0) d0.z() = -vel_(v, 2);
+    vec3(B.dv, a) = d0;
   }
-  if (constrained > 0) {
-    apply_A(h, B.dv, B.Ap);
-    for (int i = 0; i < N; ++i) B.r[i] = B.b[i] - B.Ap[i];
-  } else {
-    std::copy(B.b, B.b + N, B.r);
-  }
+  apply_A(h, B.dv, B.Ap);
+  for (int i = 0; i < N; ++i) B.r[i] = B.b[i] - B.Ap[i];
   for (int a = 0; a < na; ++a)
-    if (contact_(active_[a]) >= 0.0) B.r[3 * a + 2] = 0.0;
+    if (contact_(active_[a]) >= 0.0) B.r[3 * a + 2] = B.b[3 * a + 2] = 0.0;
   int iterations = 0;
   const double rnorm0 = std::sqrt(det_dot(B.r, B.r, N, B.partial));
-  if (rnorm0 > 0.0) {
+  const double ref = std::max(rnorm0, std::sqrt(det_dot(B.b, B.b, N, B.partial)));
+  // Absolute floor: a residual below cg_velocity_tolerance times the mass norm changes the
+  // velocities by less than about that (A >= M), whatever rounding-level right-hand side a
+  // resting sheet has; without it such a sheet would iterate on rounding noise.
+  double mass2 = 0.0;
+  for (int v : active_) mass2 += 3.0 * mass_(v) * mass_(v);
+  const double floor_abs = p_.cg_velocity_tolerance * std::sqrt(mass2);
+  if (rnorm0 > floor_abs) {
     precondition(B.r, B.p);
     double rz = det_dot(B.r, B.p, N, B.partial);
     while (iterations < p_.cg_max_iterations) {
@@ -680,7 +688,8 @@ int LatticeDynamics::implicit_substep(double h) {
       const double alpha = rz / pAp;
       axpy(alpha, B.p, B.dv);
       axpy(-alpha, B.Ap, B.r);
-      if (std::sqrt(det_dot(B.r, B.r, N, B.partial)) <= p_.cg_tolerance * rnorm0) break;
+      const double rn = std::sqrt(det_dot(B.r, B.r, N, B.partial));
+      if (rn <= p_.cg_tolerance * ref || rn <= floor_abs) break;
       precondition(B.r, B.z);
       const double rz_new = det_dot(B.r, B.z, N, B.partial);
       const double beta = rz_new / rz;
@@ -697,6 +706,7 @@ int LatticeDynamics::implicit_substep(double h) {
   for (int a = 0; a < na; ++a) {
     const int v = active_[a];
     vel_.row(v) += vec3(B.dv, a).transpose();
+    accel_.row(v) = vec3(B.dv, a).transpose() / h;
     x.row(v) += h * (vel_.row(v) + drift_.row(v));
   }
   return iterations;
@@ -767,6 +777,7 @@ void LatticeDynamics::update_sleep(double dt) {
     if (mark_[v]) {
       awake_[v] = 0;
       vel_.row(v).setZero();
+      accel_.row(v).setZero();
     }
     mark_[v] = 0;
   }

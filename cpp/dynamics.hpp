@@ -46,6 +46,7 @@ struct DynamicsParams {
   double safety = 0.9;         ///< explicit substep h = safety * (theoretical stability limit)
   double max_stretch = 0.25;   ///< implicit: largest relative change of a spring per substep
   double cg_tolerance = 1e-8;  ///< relative residual of the conjugate gradients
+  double cg_velocity_tolerance = 1e-7;  ///< m/s: absolute floor of the CG stopping test
   int cg_max_iterations = 2000;
 };
 
@@ -150,6 +151,7 @@ class LatticeDynamics {
   std::vector<int> vert_spring_;    // per couple: its top-bottom spring
   Eigen::VectorXd contact_;         // per vertex: floor impulse per mass of this substep, -1 if free
   RowMatX3 vel_, drift_, disp_;
+  RowMatX3 accel_;                  // last implicit acceleration per vertex: the CG warm start
   Eigen::VectorXd mass_, area_, heat_, heat_prev_, D_prev_, delta_;
   Eigen::Vector3d wind_{0, 0, 0};
   std::vector<std::uint8_t> pinned_, awake_, forced_;

@@ -65,6 +65,7 @@ void apply_kwargs(DynamicsParams& p, const py::kwargs& kw) {
                      : k == "safety"         ? &p.safety
                      : k == "max_stretch"    ? &p.max_stretch
                      : k == "cg_tolerance"   ? &p.cg_tolerance
+                     : k == "cg_velocity_tolerance" ? &p.cg_velocity_tolerance
                                              : nullptr;
     bool* bfield = k == "has_floor" ? &p.has_floor : k == "sleeping" ? &p.sleeping : nullptr;
     int* ifield = k == "substeps"            ? &p.substeps
@@ -103,6 +104,7 @@ py::dict params_dict(const DynamicsParams& p) {
                   "sleeping"_a = p.sleeping, "substeps"_a = p.substeps,
                   "max_substeps"_a = p.max_substeps, "safety"_a = p.safety,
                   "max_stretch"_a = p.max_stretch, "cg_tolerance"_a = p.cg_tolerance,
+                  "cg_velocity_tolerance"_a = p.cg_velocity_tolerance,
                   "cg_max_iterations"_a = p.cg_max_iterations);
 }
 
