@@ -281,6 +281,12 @@ Eigen::Vector3d LatticeDynamics::vertex_force(int v, const RowMatX3& x, const Ro
   return f;
 }
 
+std::vector<std::uint8_t> LatticeDynamics::awake() const {
+  std::vector<std::uint8_t> out(n_);
+  for (int v = 0; v < n_; ++v) out[v] = awake_[v] && !pinned_[v];
+  return out;
+}
+
 RowMatX3 LatticeDynamics::forces() const {
   RowMatX3 f(n_, 3);
   for (int v = 0; v < n_; ++v) f.row(v) = vertex_force(v, lat_.positions(), vel_).transpose();

@@ -97,8 +97,9 @@ class LatticeDynamics {
 
   /// @brief Velocities ((2 M^2) x 3), m/s.
   const RowMatX3& velocities() const { return vel_; }
-  /// @brief 1 where a vertex is awake (integrated by the next step), 0 where it sleeps.
-  std::vector<std::uint8_t> awake() const { return awake_; }
+  /// @brief 1 where a vertex is awake (integrated by the next step), 0 where it sleeps or is
+  /// pinned.
+  std::vector<std::uint8_t> awake() const;
   /// @brief Total force per vertex at the current state (springs, gravity, damping, buoyancy
   /// from the last step's heat, wind); the crumple is a prescribed motion, not in it.
   RowMatX3 forces() const;

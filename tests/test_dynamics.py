@@ -536,3 +536,28 @@ def test_bad_input_names_the_argument():
         dyn.set_pinned(np.ones(3, dtype=np.uint8))
     with pytest.raises(ValueError, match="wind"):
         dyn.set_wind([1.0, 2.0])
+
+
+def cantilever_tip(M, side=0.2, thickness=0.005):
+    lat = _core.FfdLattice(M, centred_rest(M, side / (M - 1), thickness))
+    dyn = _core.LatticeDynamics(lat, c_damping=20.0)
+    dyn.set_masses(vertex_masses(M, side * side, 0.08))
+    pinned = np.zeros(2 * M * M, dtype=np.uint8)
+    pinned[:2 * M] = 1  # the first row of couples, both layers: a clamped edge
+    dyn.set_pinned(pinned)
+    D, heat = zeros(M)
+    for _ in range(120):
+        if dyn.step(1 / 24, D, heat).awake == 0:
+            break
+    assert not dyn.awake.any()
+    return lat.positions.reshape(M, M, 2, 3)[-1, :, :, 2].mean()
+
+
+def test_stiffness_scale_makes_the_static_shape_converge_in_M():
+    # A 0.2 m paper sheet clamped along one edge droops under gravity: the tip deflection
+    # changes less and less as the lattice is refined (same sheet, same coefficients).
+    tips = [cantilever_tip(M) for M in (5, 9, 17)]
+    assert all(-0.1 < t < -0.02 for t in tips)
+    d1, d2 = abs(tips[1] - tips[0]), abs(tips[2] - tips[1])
+    assert d2 < 0.7 * d1
+    assert d2 < 0.15 * abs(tips[2])
