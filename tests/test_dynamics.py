@@ -561,3 +561,14 @@ def test_stiffness_scale_makes_the_static_shape_converge_in_M():
     d1, d2 = abs(tips[1] - tips[0]), abs(tips[2] - tips[1])
     assert d2 < 0.7 * d1
     assert d2 < 0.15 * abs(tips[2])
+
+
+def test_python_helpers_validate_their_arguments():
+    with pytest.raises(ValueError, match="name"):
+        preset("papyrus")
+    with pytest.raises(ValueError, match="M must be"):
+        vertex_masses(1, 1.0, 0.08)
+    with pytest.raises(ValueError, match="areal_density"):
+        vertex_masses(4, 1.0, -0.08)
+    m = vertex_masses(4, 0.09, 0.08)
+    assert m.shape == (32,) and m[0] == m[1] == pytest.approx(0.25 * m[2 * 5])

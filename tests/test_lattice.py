@@ -152,3 +152,22 @@ def test_bad_input_names_the_argument():
         lat.positions = np.zeros((5, 3))
     with pytest.raises(ValueError, match="thickness"):
         flat_rest(3, 1.0, 1.0, 0.0)
+
+
+def test_drape_places_couples_across_the_surface():
+    M = 3
+    mid = np.random.default_rng(6).normal(size=(M, M, 3))
+    normals = np.zeros((M, M, 3))
+    normals[..., 1] = 2.0
+    rest = drape(mid, normals, 0.01)
+    np.testing.assert_allclose(rest[1::2] - rest[0::2], np.tile([0, 0.01, 0], (M * M, 1)),
+                               atol=1e-15)
+    np.testing.assert_allclose(0.5 * (rest[1::2] + rest[0::2]), mid.reshape(-1, 3), atol=1e-15)
+    with pytest.raises(ValueError, match="mid"):
+        drape(mid[:2], normals, 0.01)
+    with pytest.raises(ValueError, match="normals"):
+        drape(mid, normals[:, :2], 0.01)
+    with pytest.raises(ValueError, match="normals must be non-zero"):
+        drape(mid, np.zeros_like(mid), 0.01)
+    with pytest.raises(ValueError, match="M must be"):
+        flat_rest(1, 1.0, 1.0, 0.01)
