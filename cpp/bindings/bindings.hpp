@@ -7,4 +7,6 @@ void define_fire_front(pybind11::module_& m);
 void define_simulation(pybind11::module_& m);
 void define_particles(pybind11::module_& m);
 void define_heat(pybind11::module_& m);
+void define_lattice(pybind11::module_& m);
+void define_dynamics(pybind11::module_& m);
 }  // namespace thinburn::bind
