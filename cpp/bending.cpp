@@ -4,12 +4,11 @@
 
 namespace thinburn {
 
-Bending::Bending(int couples, const BendingParams& p) : p_(p) {
+Bending::Bending(int couples, const BendingParams& p) : p_(p), couples_(couples) {
   if (couples < 1) throw std::invalid_argument("couples must be >= 1");
   if (!(p.d_min > 0)) throw std::invalid_argument("d_min must be > 0");
   const int n = 2 * couples;
   heat_ = rate_ = pyro_ = step_heat_ = Eigen::VectorXd::Zero(n);
-  rotation_ = Eigen::VectorXd::Zero(couples);
 }
 
 KernelSumOptions Bending::options(int power) const {
@@ -37,13 +36,13 @@ void Bending::set_pyrolysis(const RowMatX3& control, const RowMatX3& ignition_po
     pyro_.setZero();
     return;
   }
-  pyrolysis(ignition_points, control, p_.cp, options(1), pyro_);
+  thinburn::pyrolysis(ignition_points, control, p_.cp, options(1), pyro_);
 }
 
-const Eigen::VectorXd& Bending::rotation() {
-  for (Eigen::Index c = 0; c < rotation_.size(); ++c)
-    rotation_[c] = p_.alpha * (heat_[2 * c + 1] - heat_[2 * c]) + p_.beta * (pyro_[2 * c + 1] - pyro_[2 * c]);
-  return rotation_;
+void Bending::rotation(Eigen::VectorXd& out) const {
+  out.resize(couples_);
+  for (int c = 0; c < couples_; ++c)
+    out[c] = p_.alpha * (heat_[2 * c + 1] - heat_[2 * c]) + p_.beta * (pyro_[2 * c + 1] - pyro_[2 * c]);
 }
 
 }  // namespace thinburn

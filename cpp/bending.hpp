@@ -31,7 +31,7 @@ class Bending {
   /// @brief Eq 3: pyrolysis at the control vertices from the ignition points (recomputed).
   void set_pyrolysis(const RowMatX3& control, const RowMatX3& ignition_points);
   /// @brief Eqs 4-6: D = alpha (T_top - T_bottom) + beta (P_top - P_bottom) per couple.
-  const Eigen::VectorXd& rotation();
+  void rotation(Eigen::VectorXd& out) const;
 
   const Eigen::VectorXd& heat() const { return heat_; }
   const Eigen::VectorXd& heat_rate() const { return rate_; }
@@ -42,7 +42,8 @@ class Bending {
   KernelSumOptions options(int power) const;
 
   BendingParams p_;
-  Eigen::VectorXd heat_, rate_, pyro_, step_heat_, rotation_;
+  int couples_;
+  Eigen::VectorXd heat_, rate_, pyro_, step_heat_;
 };
 
 }  // namespace thinburn

@@ -120,6 +120,12 @@ Eigen::Vector3d as_vec3(const std::vector<double>& w, const char* name) {
 
 }  // namespace
 
+void apply_dynamics_kwargs(DynamicsParams& p, const py::dict& kw) {
+  apply_kwargs(p, py::reinterpret_borrow<py::kwargs>(kw));
+}
+
+py::dict dynamics_params_dict(const DynamicsParams& p) { return params_dict(p); }
+
 void define_dynamics(py::module_& m) {
   py::enum_<Integrator>(m, "Integrator", "Time integrator of the lattice.")
       .value("Explicit", Integrator::Explicit, "The paper's eqs 13-15.")
