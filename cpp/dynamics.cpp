@@ -610,8 +610,13 @@ Eigen::Vector3d LatticeDynamics::substep_drift(int v, double h) const {
   Eigen::Vector3d u = drift_.row(v).transpose();
   // A floor contact ends the substep on the floor (B&W's position alteration y = h u), lifted
   // only by the crumple: this also lands a contact that starts above the floor.
-  if (slot_[v] >= 0 && contact_(v) >= 0.0)
+  // Static friction also holds it in place against the crumple's sliding: the crumple lifts a
+  // resting sheet off the table but does not drag it across. Without this, repeated crumples
+  // with plastic rest lengths walk a sheet across the floor like an inchworm.
+  if (slot_[v] >= 0 && contact_(v) >= 0.0) {
     u.z() = std::max(u.z(), 0.0) + (p_.floor_z - lat_.positions()(v, 2)) / h;
+    if (p_.friction > 0.0) u.x() = u.y() = 0.0;
+  }
   return u;
 }
 
@@ -793,6 +798,23 @@ int LatticeDynamics::implicit_substep(double h) {
   return iterations;
 }
 
+void LatticeDynamics::remove_crumple_translation() {
+  // Fig. 5 turns neighbours about a fixed line, which moves the sheet's centre of mass; an
+  // internal stress cannot. Taking the mass-weighted mean out of the displaced vertices keeps
+  // the bend and drops the drift (which otherwise walks a burning sheet across the table).
+  Eigen::Vector3d p = Eigen::Vector3d::Zero();
+  double m = 0.0;
+  for (int v = 0; v < n_; ++v)
+    if (!pinned_[v] && disp_.row(v).squaredNorm() > 0.0) {
+      p += mass_(v) * disp_.row(v).transpose();
+      m += mass_(v);
+    }
+  if (!(m > 0.0)) return;
+  const Eigen::RowVector3d mean = (p / m).transpose();
+  for (int v = 0; v < n_; ++v)
+    if (!pinned_[v] && disp_.row(v).squaredNorm() > 0.0) disp_.row(v) -= mean;
+}
+
 void LatticeDynamics::apply_floor(double h) {
   if (!p_.has_floor) return;
   RowMatX3& x = lat_.positions();
@@ -877,10 +899,12 @@ StepStats LatticeDynamics::step(double dt, const Eigen::VectorXd& D, const Eigen
   heat_ = heat;
   delta_ = p_.crumple_gain * (D - D_prev_);
   const bool crumple = delta_.size() > 0 && delta_.cwiseAbs().maxCoeff() > 0.0;
-  if (crumple)
+  if (crumple) {
     crumple_displacements(M_, lat_.positions(), delta_, pinned_, disp_);
-  else
+    if (p_.crumple_momentum) remove_crumple_translation();
+  } else {
     disp_.setZero();
+  }
   for (int v = 0; v < n_; ++v)
     forced_[v] = disp_.row(v).squaredNorm() > 0.0 ||
                  std::abs(p_.buoyancy * (heat_(v) - heat_prev_(v))) * dt >= p_.sleep_speed;

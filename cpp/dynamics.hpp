@@ -39,6 +39,7 @@ struct DynamicsParams {
   Integrator integrator = Integrator::Implicit;
   double crumple_gain = 1.0;   ///< multiplies the increase of D turned into a crumple
   double plasticity = 1.0;     ///< in [0, 1]: share of each crumple that the springs' rest lengths keep
+  bool crumple_momentum = false;  ///< remove the crumple's net translation (it may bend, not move, the sheet)
   double sleep_speed = 1e-4;   ///< m/s: slower vertices, unforced, may sleep
   bool sleeping = true;        ///< false: every free vertex integrates every step
   int substeps = 0;            ///< 0: chosen per step from stability (explicit) or motion (implicit)
@@ -140,6 +141,7 @@ class LatticeDynamics {
   void precondition(const double* in, double* out);
   void apply_floor(double h);
   void apply_plasticity();
+  void remove_crumple_translation();
   bool wake_stressed_sleepers(double dt);
   void update_sleep(double dt);
   Eigen::Vector3d supported(int v, Eigen::Vector3d f) const;

@@ -144,7 +144,7 @@ class Simulation {
   bool mass_dirty_ = false;
   StepStats stats_;
   RowMatX3 emit_pos_, emit_normal_, ignition_pts_, particle_pos_;
-  Eigen::VectorXd emit_len_, particle_temp_, rotation_;
+  Eigen::VectorXd emit_len_, particle_temp_, rotation_, applied_rotation_;
 };
 
 }  // namespace thinburn

@@ -11,11 +11,12 @@
 namespace thinburn {
 namespace {
 
-// M from the sheet: at most one couple per 8 cells (a couple needs cells to average over) and
-// no finer than 1 cm (finer crumples are invisible and stiffen the lattice), 4..65 per side.
+// M from the sheet: one couple per 16 cells (the paper's Fig. 3 lattice is about this coarse;
+// each couple averages the heat of many cells) and no finer than 2 cm (finer crumples are
+// hardly visible and stiffen the lattice), 4..65 per side.
 int choose_lattice(int N, double size_u, double size_v) {
-  const int by_cells = N / 8 + 1;
-  const int by_size = static_cast<int>(std::min(size_u, size_v) / 0.01) + 1;
+  const int by_cells = N / 16 + 1;
+  const int by_size = static_cast<int>(std::min(size_u, size_v) / 0.02) + 1;
   return std::clamp(std::min(by_cells, by_size), 4, 65);
 }
 
@@ -193,7 +194,14 @@ void Simulation::step_shell(double dt) {
   }
   dynamics_->set_wind(wind_);
   bending_->rotation(rotation_);
-  stats_ = dynamics_->step(dt, rotation_, bending_->heat_rate());
+  // Far from the fire D creeps by micro-radians as faint heat arrives; passing those on would
+  // keep the whole lattice awake. A couple's applied rotation follows D in steps of at least
+  // kRotationQuantum, so regions at rest sleep while the error stays below that quantum.
+  constexpr double kRotationQuantum = 1e-3;  // rad
+  if (applied_rotation_.size() != rotation_.size()) applied_rotation_ = Eigen::VectorXd::Zero(rotation_.size());
+  for (Eigen::Index c = 0; c < rotation_.size(); ++c)
+    if (std::abs(rotation_[c] - applied_rotation_[c]) >= kRotationQuantum) applied_rotation_[c] = rotation_[c];
+  stats_ = dynamics_->step(dt, applied_rotation_, bending_->heat_rate());
 }
 
 }  // namespace thinburn

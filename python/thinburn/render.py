@@ -121,6 +121,9 @@ class SceneRenderer:
             self.limits[2] = (floor - 0.02 * span, floor + (1.0 + pad) * span)
         self.fig = plt.figure(figsize=(width_px / 100, height_px / 100), dpi=100)
         self.ax3 = self.fig.add_axes([0.0, 0.0, 0.62, 1.0], projection="3d")
+        # Draw in the order added (table, sheet, flames): mplot3d's per-collection depth sort
+        # puts a large table polygon in front of the sheet lying on it.
+        self.ax3.computed_zorder = False
         self.ax2 = self.fig.add_axes([0.64, 0.06, 0.34, 0.84])
         self.view = (elev, azim)
 
@@ -139,19 +142,21 @@ class SceneRenderer:
         if self.floor is not None:
             (x0, x1), (y0, y1) = self.limits[0], self.limits[1]
             table = [[(x0, y0, self.floor), (x1, y0, self.floor), (x1, y1, self.floor), (x0, y1, self.floor)]]
-            ax.add_collection3d(Poly3DCollection(table, facecolors=(0.55, 0.42, 0.3, 1.0)))
+            ax.add_collection3d(Poly3DCollection(table, facecolors=(0.55, 0.42, 0.3, 1.0), zorder=0))
         rgb = char_colours(vertex_char, vertex_state, self.material).astype(float) / 255.0
         face_rgb = rgb[self.faces].mean(axis=1)
         # Faces whose three vertices are burnt out are ash that fell away: draw them faint.
         gone = np.all(vertex_state[self.faces] == 2, axis=1) & np.all(vertex_char[self.faces] >= 1.0, axis=1)
         alpha = np.where(gone, 0.18, 1.0)
         tris = positions[self.faces]
-        coll = Poly3DCollection(tris, facecolors=np.column_stack([face_rgb, alpha]), linewidths=0)
+        order = np.argsort(-self._depth(tris.mean(axis=1)))  # painter's order within the sheet
+        coll = Poly3DCollection(tris[order], facecolors=np.column_stack([face_rgb, alpha])[order],
+                                linewidths=0, zorder=1)
         ax.add_collection3d(coll)
         if particles is not None and len(particles[1]):
             p, t = particles
             ax.scatter(p[:, 0], p[:, 1], p[:, 2], c=_temperature_colours(t), s=4, depthshade=False,
-                       linewidths=0)
+                       linewidths=0, zorder=2)
         self.ax2.cla()
         self.ax2.set_axis_off()
         self.ax2.imshow(cell_img)
@@ -159,6 +164,12 @@ class SceneRenderer:
         self.fig.canvas.draw()
         buf = np.asarray(self.fig.canvas.buffer_rgba())
         return buf[..., :3].copy()
+
+    def _depth(self, pts):
+        """Distance along the viewing direction (larger = farther from the camera)."""
+        elev, azim = np.radians(self.view[0]), np.radians(self.view[1])
+        eye = np.array([np.cos(elev) * np.cos(azim), np.cos(elev) * np.sin(azim), np.sin(elev)])
+        return -pts @ eye
 
     def close(self):
         self.plt.close(self.fig)
