@@ -84,26 +84,28 @@ def wind_objects(view_layer) -> list:
 
 
 def sample_frame(context, frame: int, sheet_name: str, igniters: list, winds: list) -> FrameSample:
-    """Move the scene to ``frame`` and read the igniters and the wind from evaluated objects."""
-    scene = context.scene
-    scene.frame_set(frame)
-    depsgraph = context.evaluated_depsgraph_get()
+    """Move the scene to ``frame`` and read the igniters and the wind.
+
+    frame_set evaluates the scene and writes animated values and world matrices back to the
+    original objects (those of the active depsgraph), which is what is read here.
+    """
+    context.scene.frame_set(frame)
     objects = bpy.data.objects
     samples = []
     for name in igniters:
-        ob = objects[name].evaluated_get(depsgraph)
+        ob = objects[name]
         ig = ob.thinburn_igniter
         samples.append((np.array(ob.matrix_world.translation, dtype=np.float64),
                         float(ig.strength), float(ig.radius)))
-    scale = objects[sheet_name].evaluated_get(depsgraph).thinburn.wind_scale
     wind = np.zeros(3)
     for name in winds:
-        ob = objects[name].evaluated_get(depsgraph)
+        ob = objects[name]
         axis = np.array(ob.matrix_world.to_3x3().col[2], dtype=np.float64)
         length = np.linalg.norm(axis)
         if length > 0:
             wind += axis / length * ob.field.strength
-    return FrameSample(frame, samples, tuple(float(w) for w in wind * scale))
+    wind *= objects[sheet_name].thinburn.wind_scale
+    return FrameSample(frame, samples, tuple(float(w) for w in wind))
 
 
 def cache_path(obj, settings) -> tuple:

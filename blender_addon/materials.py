@@ -31,6 +31,7 @@ PAPER = (0.85, 0.80, 0.70, 1.0)
 CHAR = (0.02, 0.015, 0.01, 1.0)
 EMBER = (1.0, 0.35, 0.05, 1.0)
 EMBER_KELVIN = 1300.0
+CHAR_POINT = 0.4  # share of a cell's burn after which it looks fully charred
 
 
 # --- small node-building helpers ---------------------------------------------------------------
@@ -107,6 +108,8 @@ def char_group():
         desc="Emission strength of the glowing edge")
     _io(tree, "Ember Width", "INPUT", "NodeSocketFloat", 0.3, 0.0, 1.0,
         desc="Share of the burn, before burn-through, that glows")
+    _io(tree, "Char Point", "INPUT", "NodeSocketFloat", CHAR_POINT, 0.01, 1.0,
+        desc="Share of the burn after which the material is fully charred")
     _io(tree, "Roughness", "INPUT", "NodeSocketFloat", 0.9, 0.0, 1.0)
 
     gi = _node(tree, "NodeGroupInput", -900, 0)
@@ -124,8 +127,9 @@ def char_group():
     ember = _node(tree, "ShaderNodeMath", -200, 0, operation="MULTIPLY")
     tree.links.new(glow.outputs["Result"], ember.inputs[0])
     tree.links.new(alive.outputs[0], ember.inputs[1])
+    dark = _map_range(tree, -400, 400, (char, "Result"), 0.0, (gi, "Char Point"), interp="SMOOTHSTEP")
     mix = _node(tree, "ShaderNodeMix", -200, 300, data_type="RGBA")
-    _link(tree, char, "Result", mix, "Factor_Float")
+    _link(tree, dark, "Result", mix, "Factor_Float")
     _link(tree, gi, "Paper Color", mix, "A_Color")
     _link(tree, gi, "Char Color", mix, "B_Color")
     bsdf = _node(tree, "ShaderNodeBsdfPrincipled", 50, 350)
@@ -180,8 +184,9 @@ def burn_group():
     ember = _node(tree, "ShaderNodeMath", -350, 100, operation="MULTIPLY")
     tree.links.new(glow.outputs["Result"], ember.inputs[0])
     tree.links.new(alive.outputs[0], ember.inputs[1])
+    dark = _map_range(tree, -550, 400, (char, "Result"), 0.0, CHAR_POINT, interp="SMOOTHSTEP")
     charred = _node(tree, "ShaderNodeMix", -350, 350, data_type="RGBA")
-    _link(tree, char, "Result", charred, "Factor_Float")
+    _link(tree, dark, "Result", charred, "Factor_Float")
     _set(charred, "A_Color", PAPER)
     _set(charred, "B_Color", CHAR)
     colour = _node(tree, "ShaderNodeMix", -150, 300, data_type="RGBA")
@@ -210,11 +215,16 @@ def burn_group():
     return tree
 
 
+def _use_nodes(mat):
+    if mat.node_tree is None:  # Blender < 5.0 starts materials without nodes
+        mat.use_nodes = True
+
+
 # --- applying and freeing a bake ------------------------------------------------------------------
 def char_material(obj):
     """A material "ThinBurn <sheet>" whose surface is the "ThinBurn Char" group."""
     mat = bpy.data.materials.new(f"ThinBurn {obj.name}")
-    mat.use_nodes = True
+    _use_nodes(mat)
     tree = mat.node_tree
     tree.nodes.clear()
     group = _node(tree, "ShaderNodeGroup", 0, 0, node_tree=char_group())
@@ -380,7 +390,7 @@ def fire_material():
     if mat is not None:
         return mat
     mat = bpy.data.materials.new(FIRE_GROUP)
-    mat.use_nodes = True
+    _use_nodes(mat)
     tree = mat.node_tree
     tree.nodes.clear()
     temp = _node(tree, "ShaderNodeAttribute", -600, 0, attribute_type="GEOMETRY", attribute_name="temperature")

@@ -12,6 +12,8 @@ from bpy.props import (BoolProperty, EnumProperty, FloatProperty, IntProperty, P
                        StringProperty)
 
 STATIC = set()  # options=STATIC: not animatable (read once per bake)
+# Blender 4.5+ warns about '//' in path properties that do not declare they accept it.
+RELATIVE_PATH = {"PATH_SUPPORTS_BLEND_RELATIVE"} if bpy.app.version >= (4, 5, 0) else set()
 
 # Material fields the panel exposes (thinburn.Material), with their UI text.
 MATERIAL_FIELDS = {
@@ -141,7 +143,7 @@ class ThinBurnSettings(bpy.types.PropertyGroup):
         name="End", default=250, min=0, options=STATIC,
         description="Last frame of the bake")
     cache_dir: StringProperty(
-        name="Cache Folder", default="//thinburn_cache/", subtype="DIR_PATH", options=STATIC,
+        name="Cache Folder", default="//thinburn_cache/", subtype="DIR_PATH", options=RELATIVE_PATH,
         description="Folder of the bake's PC2 file; '//' means next to the .blend file")
 
     show_advanced: BoolProperty(name="Advanced", default=False, options=STATIC,
