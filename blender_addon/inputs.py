@@ -83,13 +83,13 @@ def wind_objects(view_layer) -> list:
             if o.field is not None and o.field.type == "WIND"]
 
 
-def sample_frame(context, frame: int, sheet_name: str, igniters: list, winds: list) -> FrameSample:
+def sample_frame(scene, frame: int, sheet_name: str, igniters: list, winds: list) -> FrameSample:
     """Move the scene to ``frame`` and read the igniters and the wind.
 
     frame_set evaluates the scene and writes animated values and world matrices back to the
     original objects (those of the active depsgraph), which is what is read here.
     """
-    context.scene.frame_set(frame)
+    scene.frame_set(frame)
     objects = bpy.data.objects
     samples = []
     for name in igniters:

@@ -7,7 +7,6 @@ the main thread; the worker (worker.py) never sees bpy.
 from __future__ import annotations
 
 import inspect
-import math
 import queue
 import time as _time
 
@@ -35,7 +34,6 @@ class BakeJob:
     """Bake ``obj`` frame by frame; the previous bake is replaced only when all frames are in."""
 
     def __init__(self, context, obj):
-        self.context = context
         self.obj_name = obj.name
         self.scene = context.scene
         settings = obj.thinburn
@@ -132,7 +130,7 @@ class BakeJob:
             need = min(self.next_task + 1, n - 1)
             while self.next_sample <= need:
                 self.samples[self.next_sample] = inputs.sample_frame(
-                    self.context, self.frames[self.next_sample], self.obj_name, self.igniters,
+                    self.scene, self.frames[self.next_sample], self.obj_name, self.igniters,
                     self.winds)
                 self.next_sample += 1
             self.worker.tasks.put(self._task(self.next_task))
@@ -214,9 +212,3 @@ class BakeJob:
                         f"in {self.elapsed:.1f} s; {ignited} of {self.n_vertices} vertices caught fire")
         if ignited == 0:
             self.message += " (no lit igniter touched the sheet)"
-
-
-def frames_to_seconds(frames: np.ndarray, start: float, fps: float) -> np.ndarray:
-    """Inverse of cache.seconds_to_frames (NEVER_FRAME -> inf)."""
-    f = np.asarray(frames, dtype=np.float64)
-    return np.where(f >= cache.NEVER_FRAME, math.inf, (f - start) / fps)

@@ -100,3 +100,61 @@ def test_fire_particles_become_an_emitting_point_cloud(addon, tmp_path):
     assert addon.materials.free_bake(sheet)  # the fire object and its file go with the bake
     assert "ThinBurn Fire Sheet" not in bpy.data.objects
     assert not (tmp_path / "Sheet_fire.pc2").exists()
+
+
+class _Layout:
+    """Stands in for UILayout: records what a panel draws and checks each property exists."""
+
+    def __init__(self, log):
+        self.log = log
+
+    def _sub(self, *args, **kwargs):
+        return _Layout(self.log)
+
+    row = column = box = split = _sub
+
+    def prop(self, data, name, **kwargs):
+        assert name in data.bl_rna.properties, f"panel draws a missing property {name!r}"
+        self.log.append(name)
+
+    def prop_search(self, data, name, search_data, search_name, **kwargs):
+        assert name in data.bl_rna.properties and search_name in search_data.bl_rna.properties
+        self.log.append(name)
+
+    def operator(self, idname, **kwargs):
+        category, op = idname.split(".")
+        assert hasattr(getattr(bpy.ops, category), op), idname
+        self.log.append(idname)
+
+    def label(self, **kwargs):
+        pass
+
+    def progress(self, **kwargs):
+        pass
+
+
+class _Context:
+    def __init__(self, obj):
+        self.object = obj
+        self.active_object = obj
+        self.scene = bpy.context.scene
+
+
+def test_panels_draw_existing_properties_and_operators(addon):
+    sheet = make_sheet()
+    empty = bpy.data.objects.new("Igniter", None)
+    bpy.context.scene.collection.objects.link(empty)
+    drawn = []
+    for obj in (sheet, empty):
+        ctx = _Context(obj)
+        for cls in addon.panels.CLASSES:
+            if not cls.poll(ctx):
+                continue
+            fake = type("P", (), {"layout": _Layout(drawn)})()
+            if hasattr(cls, "draw_header"):
+                cls.draw_header(fake, ctx)
+            cls.draw(fake, ctx)
+    for name in ("enabled", "material", "cells", "lattice", "igniter_collection", "pin_group",
+                 "frame_start", "frame_end", "cache_dir", "thinburn.bake", "thinburn.free_bake",
+                 "mat_V0", "v_floor", "strength", "radius"):
+        assert name in drawn, name

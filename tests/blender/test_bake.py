@@ -174,8 +174,8 @@ def test_wind_is_read_per_frame(addon, tmp_path):
     inputs = addon.inputs
     winds = inputs.wind_objects(bpy.context.view_layer)
     assert winds == [wind.name]
-    at1 = inputs.sample_frame(bpy.context, 1, sheet.name, ["Igniter"], winds)
-    at3 = inputs.sample_frame(bpy.context, 3, sheet.name, ["Igniter"], winds)
+    at1 = inputs.sample_frame(bpy.context.scene, 1, sheet.name, ["Igniter"], winds)
+    at3 = inputs.sample_frame(bpy.context.scene, 3, sheet.name, ["Igniter"], winds)
     np.testing.assert_allclose(at1.wind, (1.0, 0.0, 0.0), atol=1e-6)
     np.testing.assert_allclose(at3.wind, (3.0, 0.0, 0.0), atol=1e-6)
     assert at1.igniters[0][1] == 1.0
