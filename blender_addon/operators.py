@@ -43,6 +43,7 @@ class THINBURN_OT_bake(bpy.types.Operator):
 
     _timer = None
     _job = None
+    _status_bar = False
 
     @classmethod
     def poll(cls, context):
@@ -84,6 +85,7 @@ class THINBURN_OT_bake(bpy.types.Operator):
         self._timer = wm.event_timer_add(0.05, window=context.window)
         wm.progress_begin(0, len(job.frames))
         bpy.types.STATUSBAR_HT_header.append(_draw_status)
+        self._status_bar = True
         wm.modal_handler_add(self)
         return {"RUNNING_MODAL"}
 
@@ -94,7 +96,7 @@ class THINBURN_OT_bake(bpy.types.Operator):
             self._end(context)
             self.report({"WARNING"}, "ThinBurn: bake cancelled; the previous bake is unchanged")
             return {"CANCELLED"}
-        if event.type != "TIMER" or event.timer is not self._timer:
+        if event.type != "TIMER":
             return {"PASS_THROUGH"}
         try:
             done = job.tick(budget_s=0.04)
@@ -121,7 +123,9 @@ class THINBURN_OT_bake(bpy.types.Operator):
             self._timer = None
         wm.progress_end()
         context.workspace.status_text_set(None)
-        bpy.types.STATUSBAR_HT_header.remove(_draw_status)
+        if self._status_bar:
+            bpy.types.STATUSBAR_HT_header.remove(_draw_status)
+            self._status_bar = False
         _running.pop(context.scene.name, None)
         for area in context.screen.areas:
             area.tag_redraw()

@@ -219,3 +219,45 @@ def test_bad_settings_give_a_clear_report(addon, tmp_path, case, message):
     assert message in text
     assert "Traceback" not in text
     assert not sheet.modifiers
+
+
+def _modal_harness(addon, job):
+    """The modal operator's methods on a stand-in instance (no window in bpy-as-a-module)."""
+    from types import SimpleNamespace
+    op_cls = addon.operators.THINBURN_OT_bake
+    reports, status = [], []
+    op = SimpleNamespace(_job=job, _timer=None, _status_bar=False,
+                         report=lambda kind, text: reports.append((kind, text)))
+    op._end = lambda ctx: op_cls._end(op, ctx)
+    ctx = SimpleNamespace(window_manager=bpy.context.window_manager, scene=bpy.context.scene,
+                          workspace=SimpleNamespace(status_text_set=status.append),
+                          screen=SimpleNamespace(areas=[]))
+    addon.operators._running[ctx.scene.name] = job
+
+    def send(kind):
+        return op_cls.modal(op, ctx, SimpleNamespace(type=kind, value="PRESS"))
+    return send, reports, status
+
+
+def test_modal_bake_runs_on_timer_events_and_esc_cancels(addon, baked, tmp_path):
+    path = tmp_path / "cache" / "Sheet.pc2"
+    before = path.read_bytes()
+    bpy.data.objects["Igniter"].location = (0.1, 0.1, 0.5)
+    send, reports, status = _modal_harness(addon, addon.job.BakeJob(bpy.context, baked))
+    assert send("MOUSEMOVE") == {"PASS_THROUGH"}
+    for _ in range(3):
+        assert send("TIMER") == {"RUNNING_MODAL"}
+    assert any("frame" in s for s in status if s)
+    assert send("ESC") == {"CANCELLED"}
+    assert path.read_bytes() == before
+    assert "cancelled" in reports[-1][1]
+    assert addon.operators.running_job(bpy.context.scene) is None
+
+    send, reports, status = _modal_harness(addon, addon.job.BakeJob(bpy.context, baked))
+    for _ in range(10_000):
+        result = send("TIMER")
+        if result != {"RUNNING_MODAL"}:
+            break
+    assert result == {"FINISHED"}, reports
+    assert path.read_bytes() != before  # the igniter moved: a different bake replaced it
+    assert status[-1] is None  # the status bar is given back
