@@ -47,20 +47,25 @@ class BakeJob:
         self.dt = 1.0 / self.fps
         self.igniters = inputs.igniter_objects(obj, settings)
         self.winds = inputs.wind_objects(context.view_layer)
-        world, tris, self.matrix = inputs.sheet_geometry(obj)
+        self.frame_restore = self.scene.frame_current
+        # The sheet's rest state (its transform, the floor) is read at the first frame.
+        self.scene.frame_set(self.frames[0])
+        try:
+            world, tris, self.matrix = inputs.sheet_geometry(obj)
+            kwargs = self._simulation_kwargs(obj, settings)
+            self.modifier_path, self.abs_path = inputs.cache_path(obj, settings)
+            self.writer = cache.PC2Writer(self.abs_path, len(world), start_frame=float(self.frames[0]))
+        except OSError as exc:
+            self._restore_frame()
+            raise BakeError(f"cannot write the cache file in '{settings.cache_dir}': "
+                            f"{exc.strerror or exc}") from None
+        except BakeError:
+            self._restore_frame()
+            raise
         self.n_vertices = len(world)
         self.spacing = 0.5 * float(np.ptp(world, axis=0).max()) / settings.cells
-        kwargs = self._simulation_kwargs(obj, settings)
-        self.modifier_path, self.abs_path = inputs.cache_path(obj, settings)
-        try:
-            self.writer = cache.PC2Writer(self.abs_path, self.n_vertices,
-                                          start_frame=float(self.frames[0]))
-        except OSError as exc:
-            raise BakeError(f"cannot write the cache file '{self.abs_path}': "
-                            f"{exc.strerror or exc}") from None
         self.want_particles = core_has_particles()
         self.particle_frames = []
-        self.frame_restore = self.scene.frame_current
         self.samples = {}
         self.next_sample = 0      # index of the next frame to sample
         self.next_task = 0        # index of the next frame to hand to the worker

@@ -1,6 +1,8 @@
 """Baking in real Blender: the cache, the modifier, the attributes, cancel, free, reload."""
 from __future__ import annotations
 
+import time
+
 import numpy as np
 import pytest
 
@@ -253,11 +255,16 @@ def test_modal_bake_runs_on_timer_events_and_esc_cancels(addon, baked, tmp_path)
     assert "cancelled" in reports[-1][1]
     assert addon.operators.running_job(bpy.context.scene) is None
 
-    send, reports, status = _modal_harness(addon, addon.job.BakeJob(bpy.context, baked))
-    for _ in range(10_000):
-        result = send("TIMER")
-        if result != {"RUNNING_MODAL"}:
-            break
+    job = addon.job.BakeJob(bpy.context, baked)
+    send, reports, status = _modal_harness(addon, job)
+    deadline = time.monotonic() + 60.0
+    try:
+        while (result := send("TIMER")) == {"RUNNING_MODAL"} and time.monotonic() < deadline:
+            time.sleep(0.001)  # timer events come every 50 ms in Blender
+    finally:
+        if not job.finished:
+            job.cancel()
+        addon.operators._running.clear()
     assert result == {"FINISHED"}, reports
     assert path.read_bytes() != before  # the igniter moved: a different bake replaced it
     assert status[-1] is None  # the status bar is given back
