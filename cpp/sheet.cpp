@@ -51,18 +51,47 @@ Sheet::Sheet(const RowMatX3& vertices, const RowMatX3i& faces, const RowMatX2& u
     : n_(cells), vertices_(vertices) {
   if (cells < 2) throw std::invalid_argument("cells must be >= 2");
   if (vertices.rows() < 3 || faces.rows() < 1) throw std::invalid_argument("vertices/faces: empty mesh");
+  if (faces.minCoeff() < 0 || faces.maxCoeff() >= vertices.rows())
+    throw std::invalid_argument("faces: indices out of range");
+  if (uv.rows() != 0 && uv.rows() != vertices.rows()) throw std::invalid_argument("uv: one row per vertex expected");
+  if (!vertices.allFinite() || !uv.allFinite()) throw std::invalid_argument("vertices/uv: NaN or inf");
   for (Eigen::Index f = 0; f < faces.rows(); ++f)
     area_ += triangle_area(vertices.row(faces(f, 0)), vertices.row(faces(f, 1)), vertices.row(faces(f, 2)));
   if (!(area_ > 0)) throw std::invalid_argument("faces: the mesh has zero area");
   frame_ = best_fit_frame(vertices);
-  build_parameterisation(uv);
+  build_parameterisation(uv, faces);
   rasterise(faces);
   fill_outside();
   build_normals();
   build_vertex_weights();
 }
 
-void Sheet::build_parameterisation(const RowMatX2& uv) {
+// UV is unitless and may be stretched or sheared. Map it by the square root of its average
+// metric tensor (the mean of J^T J over triangles, J the UV-to-3-D Jacobian), so parameter
+// lengths are metres on average in every direction and cells keep their aspect in 3-D.
+static Eigen::Matrix2d uv_metric_root(const RowMatX3& V, const RowMatX3i& F, const RowMatX2& uv) {
+  Eigen::Matrix2d G = Eigen::Matrix2d::Zero();
+  double total = 0;
+  for (Eigen::Index f = 0; f < F.rows(); ++f) {
+    Eigen::Matrix2d e;
+    e.col(0) = (uv.row(F(f, 1)) - uv.row(F(f, 0))).transpose();
+    e.col(1) = (uv.row(F(f, 2)) - uv.row(F(f, 0))).transpose();
+    const double a = std::abs(e.determinant()) * 0.5;
+    if (a < 1e-300) continue;
+    Eigen::Matrix<double, 3, 2> E;
+    E.col(0) = (V.row(F(f, 1)) - V.row(F(f, 0))).transpose();
+    E.col(1) = (V.row(F(f, 2)) - V.row(F(f, 0))).transpose();
+    const Eigen::Matrix<double, 3, 2> J = E * e.inverse();
+    G += a * (J.transpose() * J);
+    total += a;
+  }
+  if (!(total > 0)) throw std::invalid_argument("uv: the UV layout has zero area");
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> es(G / total);
+  if (!(es.eigenvalues().minCoeff() > 0)) throw std::invalid_argument("uv: the UV layout is degenerate");
+  return es.operatorSqrt();
+}
+
+void Sheet::build_parameterisation(const RowMatX2& uv, const RowMatX3i& faces) {
   const Eigen::Index nv = vertices_.rows();
   RowMatX2 p(nv, 2);
   if (uv.rows() == 0) {
@@ -72,7 +101,7 @@ void Sheet::build_parameterisation(const RowMatX2& uv) {
       p(i, 1) = d.dot(frame_.v);
     }
   } else {
-    p = uv;
+    p = uv * uv_metric_root(vertices_, faces, uv).transpose();
   }
   Eigen::Vector2d lo = p.colwise().minCoeff(), hi = p.colwise().maxCoeff();
   if (!(hi.x() > lo.x()) || !(hi.y() > lo.y()))
@@ -86,17 +115,6 @@ void Sheet::rasterise(const RowMatX3i& faces) {
   const int N = n_;
   inside_.assign(static_cast<size_t>(N) * N, 0);
   cell_rest_ = RowMatX3::Zero(N * N, 3);
-  // UV layouts are unitless: rescale parameter lengths so the parameter area equals the 3-D area.
-  double param_area = 0;
-  for (Eigen::Index f = 0; f < faces.rows(); ++f)
-    param_area += std::abs(signed_area_2d(vertex_param_.row(faces(f, 0)), vertex_param_.row(faces(f, 1)),
-                                          vertex_param_.row(faces(f, 2))));
-  if (!(param_area > 0)) throw std::invalid_argument("uv: the UV layout has zero area");
-  const double scale = std::sqrt(area_ / param_area);
-  vertex_param_ *= scale;
-  du_ *= scale;
-  dv_ *= scale;
-
   for (Eigen::Index f = 0; f < faces.rows(); ++f) {
     const Eigen::Vector2d a = vertex_param_.row(faces(f, 0)), b = vertex_param_.row(faces(f, 1)),
                           c = vertex_param_.row(faces(f, 2));

@@ -60,7 +60,7 @@ class Sheet {
   Eigen::Vector2d lattice_st(double u, double v, int M) const;
 
  private:
-  void build_parameterisation(const RowMatX2& uv);
+  void build_parameterisation(const RowMatX2& uv, const RowMatX3i& faces);
   void rasterise(const RowMatX3i& faces);
   void fill_outside();
   void build_normals();

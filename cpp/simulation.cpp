@@ -43,9 +43,22 @@ Simulation::Simulation(const RowMatX3& vertices, const RowMatX3i& faces, const R
   speed_fn_ = [this](int cell) { return local_speed(cell); };
 }
 
-double Simulation::noise(int cell, std::uint64_t stream) const {
-  const std::uint64_t h = mix(params_.seed ^ mix(stream * 0x100000001b3ULL + static_cast<std::uint64_t>(cell)));
+double Simulation::hash_uniform(std::uint64_t stream, std::uint64_t key) const {
+  const std::uint64_t h = mix(params_.seed ^ mix(stream * 0x100000001b3ULL + key));
   return 2.0 * (static_cast<double>(h >> 11) * 0x1.0p-53) - 1.0;  // uniform in [-1, 1)
+}
+
+double Simulation::noise(int cell, std::uint64_t stream) const {
+  // Real sheets vary over centimetres, not per cell: mostly a smooth value-noise field
+  // (bilinear between random values every kNoiseScale cells), plus a little per-cell grain.
+  constexpr int kNoiseScale = 10;
+  const int N = sheet_.cells(), r = cell / N, c = cell % N;
+  const int gr = r / kNoiseScale, gc = c / kNoiseScale;
+  const double fr = (r % kNoiseScale + 0.5) / kNoiseScale, fc = (c % kNoiseScale + 0.5) / kNoiseScale;
+  auto node = [&](int i, int j) { return hash_uniform(stream + 7, (static_cast<std::uint64_t>(i) << 32) | static_cast<std::uint32_t>(j)); };
+  const double smooth = (1 - fr) * ((1 - fc) * node(gr, gc) + fc * node(gr, gc + 1)) +
+                        fr * ((1 - fc) * node(gr + 1, gc) + fc * node(gr + 1, gc + 1));
+  return 0.75 * smooth + 0.25 * hash_uniform(stream, static_cast<std::uint64_t>(cell));
 }
 
 Eigen::Vector3d Simulation::cell_position(int cell) const {

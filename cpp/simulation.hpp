@@ -81,6 +81,7 @@ class Simulation {
   Eigen::Vector3d cell_position(int cell) const;
   void retire_burnt();
   double noise(int cell, std::uint64_t stream) const;
+  double hash_uniform(std::uint64_t stream, std::uint64_t key) const;
 
   SimulationParams params_;
   Sheet sheet_;

@@ -91,6 +91,14 @@ void define_simulation(py::module_& m) {
       .def("vertex_char", &S::vertex_char)
       .def("vertex_ignition_times", &S::vertex_ignition_times)
       .def("vertex_burnout_times", &S::vertex_burnout_times)
+      .def("cells_to_vertices",
+           [](const S& s, const Eigen::VectorXd& field) {
+             if (field.size() != s.sheet().num_cells()) throw std::invalid_argument("field: expected N*N values");
+             Eigen::VectorXd out(s.sheet().vertices().rows());
+             s.sheet().cells_to_vertices(field.data(), out.data());
+             return out;
+           },
+           py::arg("field"))
       .def("grad2", &S::grad2, py::arg("cell"))
       .def("local_speed",
            [](const S& s, int cell) {

@@ -34,9 +34,10 @@ def run_demo(out_dir, material="paper", cells=128, fps=24.0, max_time=240.0, fra
     dt = 1.0 / fps
     aspect = A4[1] / A4[0]
     # A first pass finds how long the burn takes, so the frames span the whole of it.
-    record_every = max(1, int(round(_estimate_duration(sim, max_time) / dt / frames)))
+    expected_steps = int(np.ceil(_estimate_duration(sim, max_time) / dt))
+    record_every = max(1, int(round(expected_steps / frames)))
     sim, _ = default_scene(material, cells, seed, threads)
-    progress = None if quiet else Progress(int(max_time / dt), label=f"burning {material}")
+    progress = None if quiet else Progress(expected_steps, label=f"burning {material}")
     store = {"time": [], "cell_states": [], "cell_char": [], "vertex_positions": [], "vertex_char": []}
     images, step, t0 = [], 0, time.perf_counter()
     while True:
@@ -48,7 +49,7 @@ def run_demo(out_dir, material="paper", cells=128, fps=24.0, max_time=240.0, fra
             _record(sim, states, store)
             images.append(render.cell_image(states, sim.cell_char(), sim.inside(), material, aspect))
         if progress is not None:
-            progress.update(step if not done else progress.total,
+            progress.update(min(step, progress.total - (not done)),
                             f"t={sim.time:6.1f}s burning={int(np.sum(states == 1))}")
         if done:
             break

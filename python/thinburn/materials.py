@@ -33,7 +33,7 @@ class Material:
     # --- not in the paper; our documented defaults ---
     Cv: float = 0.5               # eq 1 spread coefficient (grad = 1, a 45° slope, halves V)
     burn_duration: float = 4.0    # s a cell burns before it is burnt
-    speed_noise: float = 0.08     # relative per-cell jitter of V0 (organic, non-grid fronts)
+    speed_noise: float = 0.15     # relative jitter of V0, smooth over ~10 cells (organic fronts)
     duration_noise: float = 0.2   # relative per-cell jitter of the burn duration
     ash_fraction: float = 0.1     # share of its mass a burnt cell keeps as ash
 

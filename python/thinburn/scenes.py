@@ -34,3 +34,21 @@ def grid_uv(nx, ny):
     """The natural UV of rect_sheet(nx=nx, ny=ny): (nx*ny, 2) in [0, 1]^2."""
     u, v = np.meshgrid(np.linspace(0, 1, nx), np.linspace(0, 1, ny))
     return np.stack([u.ravel(), v.ravel()], axis=1)
+
+
+def disk_sheet(radius=0.1, rings=12, segments=48, z=0.0):
+    """A flat disk in the xy-plane at height z, as a fan of rings: (vertices, faces)."""
+    radius = V.real(radius, "radius", low=0.0, low_open=True)
+    rings = V.integer(rings, "rings", low=1)
+    segments = V.integer(segments, "segments", low=3)
+    rr = np.repeat(radius * np.arange(1, rings + 1) / rings, segments)
+    a = np.tile(2 * np.pi * np.arange(segments) / segments, rings)
+    verts = np.concatenate([[[0.0, 0.0, z]], np.stack([rr * np.cos(a), rr * np.sin(a), np.full(a.size, float(z))], 1)])
+    s = np.arange(segments)
+    s1 = (s + 1) % segments
+    faces = [np.stack([np.zeros(segments, int), 1 + s, 1 + s1], 1)]
+    for r in range(1, rings):
+        b0, b1 = 1 + (r - 1) * segments, 1 + r * segments
+        faces.append(np.stack([b0 + s, b1 + s, b1 + s1], 1))
+        faces.append(np.stack([b0 + s, b1 + s1, b0 + s1], 1))
+    return verts, np.concatenate(faces).astype(np.int32)

@@ -193,6 +193,12 @@ class Simulation:
         """(n,) when each vertex's cell burns out, inf where not ignited yet."""
         return self._sim.vertex_burnout_times()
 
+    def cells_to_vertices(self, field) -> np.ndarray:
+        """Interpolate any (N, N) per-cell field to the input vertices (bilinear over inside cells)."""
+        n = self.cells
+        f = V.real_array(field, "field", (n, n))
+        return self._sim.cells_to_vertices(f.ravel())
+
     def local_speed(self, row, col) -> tuple:
         """(v, e_row, e_col): the spread law now at a cell (eq 1 and the drive vector)."""
         n = self.cells
