@@ -3,4 +3,5 @@
 
 namespace thinburn::bind {
 void define_threads(pybind11::module_& m);
+void define_fire_front(pybind11::module_& m);
 }  // namespace thinburn::bind

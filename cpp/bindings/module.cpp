@@ -4,4 +4,5 @@
 PYBIND11_MODULE(_core, m) {
   m.doc() = "thinburn C++ core";
   thinburn::bind::define_threads(m);
+  thinburn::bind::define_fire_front(m);
 }
