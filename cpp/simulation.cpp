@@ -120,7 +120,10 @@ int Simulation::ignite(const Eigen::Vector3d& point, double t, double radius) {
     throw std::invalid_argument("point: no cell of the sheet lies within " + std::to_string(reach) +
                                 " m of the point (nearest is " + std::to_string(std::sqrt(best_d2)) + " m away)");
   if (lit.empty()) lit.push_back(best);
-  for (int c : lit) front_.ignite(FrontSource{static_cast<double>(c / N), static_cast<double>(c % N), t}, speed_fn_);
+  // The front cannot rewrite cells it has already accepted, so an ignition time before the
+  // last step is taken as that step's end: the fire starts now and catches up from there.
+  const double t0 = std::max(t, front_.time());
+  for (int c : lit) front_.ignite(FrontSource{static_cast<double>(c / N), static_cast<double>(c % N), t0}, speed_fn_);
   return static_cast<int>(lit.size());
 }
 

@@ -4,4 +4,7 @@
 namespace thinburn::bind {
 void define_threads(pybind11::module_& m);
 void define_fire_front(pybind11::module_& m);
+void define_simulation(pybind11::module_& m);
+void define_particles(pybind11::module_& m);
+void define_heat(pybind11::module_& m);
 }  // namespace thinburn::bind

@@ -5,4 +5,7 @@ PYBIND11_MODULE(_core, m) {
   m.doc() = "thinburn C++ core";
   thinburn::bind::define_threads(m);
   thinburn::bind::define_fire_front(m);
+  thinburn::bind::define_simulation(m);
+  thinburn::bind::define_particles(m);
+  thinburn::bind::define_heat(m);
 }
