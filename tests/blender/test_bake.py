@@ -244,6 +244,7 @@ def _modal_harness(addon, job):
 def test_modal_bake_runs_on_timer_events_and_esc_cancels(addon, baked, tmp_path):
     path = tmp_path / "cache" / "Sheet.pc2"
     before = path.read_bytes()
+    before_ignite = point_attribute(baked, "thinburn_ignite_time").copy()
     bpy.data.objects["Igniter"].location = (0.1, 0.1, 0.5)
     send, reports, status = _modal_harness(addon, addon.job.BakeJob(bpy.context, baked))
     assert send("MOUSEMOVE") == {"PASS_THROUGH"}
@@ -252,6 +253,7 @@ def test_modal_bake_runs_on_timer_events_and_esc_cancels(addon, baked, tmp_path)
     assert any("frame" in s for s in status if s)
     assert send("ESC") == {"CANCELLED"}
     assert path.read_bytes() == before
+    np.testing.assert_array_equal(point_attribute(baked, "thinburn_ignite_time"), before_ignite)
     assert "cancelled" in reports[-1][1]
     assert addon.operators.running_job(bpy.context.scene) is None
 
@@ -266,5 +268,7 @@ def test_modal_bake_runs_on_timer_events_and_esc_cancels(addon, baked, tmp_path)
             job.cancel()
         addon.operators._running.clear()
     assert result == {"FINISHED"}, reports
-    assert path.read_bytes() != before  # the igniter moved: a different bake replaced it
+    # The igniter moved to the opposite corner: the new bake replaced the old one.
+    ignite = point_attribute(baked, "thinburn_ignite_time")
+    assert ignite[-1] == ignite.min() < ignite[0]
     assert status[-1] is None  # the status bar is given back
