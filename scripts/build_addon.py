@@ -60,10 +60,19 @@ def wheel_platform(wheel: Path) -> str:
     sys.exit(f"build_addon: no Blender platform for the wheel tag {tag!r} ({wheel.name})")
 
 
+BUILD_REQUIRES = ("scikit_build_core", "pybind11", "cmeel")
+
+
+def has_build_requires(python: str) -> bool:
+    """Whether `python` can build the wheel without an isolated build environment."""
+    probe = "import " + ", ".join(BUILD_REQUIRES)
+    return subprocess.run([python, "-c", probe], capture_output=True).returncode == 0
+
+
 def build_wheel(python: str, out: Path, isolation: bool) -> Path:
     cmd = [python, "-m", "pip", "wheel", str(ROOT), "--no-deps", "-w", str(out)]
-    if not isolation:
-        cmd.append("--no-build-isolation")
+    if not isolation and has_build_requires(python):
+        cmd.append("--no-build-isolation")  # reuses build/{wheel_tag}: incremental
     print("+", " ".join(cmd), flush=True)
     subprocess.run(cmd, check=True)
     wheels = sorted(out.glob("thinburn-*.whl"))
@@ -110,7 +119,7 @@ def main(argv=None) -> int:
                          "Blender (3.11 for 4.2 to 5.0)")
     ap.add_argument("--build-isolation", action="store_true",
                     help="let pip build in an isolated environment (default: use the installed "
-                         "scikit-build-core, pybind11, cmeel-eigen)")
+                         "scikit-build-core, pybind11, cmeel-eigen when they are there)")
     ap.add_argument("--out", type=Path, default=ROOT / "dist", help="folder of the zip")
     args = ap.parse_args(argv)
 

@@ -6,7 +6,7 @@ import pytest
 
 bpy = pytest.importorskip("bpy")
 
-from conftest import ROOT, make_sheet  # noqa: E402
+from blender_helpers import ROOT, make_sheet  # noqa: E402
 
 
 def test_registers_properties_operators_and_panels(addon):

@@ -8,8 +8,8 @@ import pytest
 
 bpy = pytest.importorskip("bpy")
 
-from conftest import (evaluated_positions, make_igniter, make_sheet, point_attribute,  # noqa: E402
-                      setup_bake)
+from blender_helpers import (evaluated_positions, make_igniter, make_sheet,  # noqa: E402
+                             point_attribute, setup_bake)
 
 FRAMES = 30
 LIT_FROM = 8

@@ -9,7 +9,7 @@ import pytest
 
 bpy = pytest.importorskip("bpy")
 
-from conftest import make_igniter, make_sheet, point_attribute, setup_bake  # noqa: E402
+from blender_helpers import make_igniter, make_sheet, point_attribute, setup_bake  # noqa: E402
 
 LIT_FROM = 2
 BURN_S = 2.0  # burn duration: long enough that the render frame shows char, not holes
