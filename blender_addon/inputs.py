@@ -91,6 +91,9 @@ def sample_frame(scene, frame: int, sheet_name: str, igniters: list, winds: list
     """
     scene.frame_set(frame)
     objects = bpy.data.objects
+    for name in (sheet_name, *igniters, *winds):
+        if objects.get(name) is None:
+            raise BakeError(f"'{name}' was deleted or renamed during the bake")
     samples = []
     for name in igniters:
         ob = objects[name]

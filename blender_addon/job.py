@@ -63,6 +63,7 @@ class BakeJob:
             self._restore_frame()
             raise
         self.n_vertices = len(world)
+        self.inverse = np.linalg.inv(self.matrix)
         self.spacing = 0.5 * float(np.ptp(world, axis=0).max()) / settings.cells
         self.want_particles = core_has_particles()
         self.particle_frames = []
@@ -110,8 +111,7 @@ class BakeJob:
     # --- driving -----------------------------------------------------------------------------
     def tick(self, budget_s: float = 0.05) -> bool:
         """Sample ahead, hand frames to the worker, store what came back. True when finished."""
-        deadline = _time.perf_counter() + budget_s
-        self._sample_ahead(deadline)
+        self._sample_ahead(_time.perf_counter() + budget_s)
         self._drain(block=False)
         return self.finished
 
@@ -130,6 +130,12 @@ class BakeJob:
         self.finished = True
 
     def _sample_ahead(self, deadline: float) -> None:
+        try:
+            self._sample_frames(deadline)
+        except BakeError as exc:
+            self._fail(str(exc))
+
+    def _sample_frames(self, deadline: float) -> None:
         n = len(self.frames)
         while self.next_task < n and self.next_task < self.frames_done + LOOKAHEAD:
             need = min(self.next_task + 1, n - 1)
@@ -177,18 +183,13 @@ class BakeJob:
                 self._finish(msg[1], msg[2])
             elif kind == "error":
                 self._fail(f"the simulation failed: {msg[1]}")
-            elif kind == "ready":
-                pass
 
     def _to_local(self, world: np.ndarray) -> np.ndarray:
-        inv = np.linalg.inv(self.matrix)
+        inv = self.inverse
         return world @ inv[:3, :3].T + inv[:3, 3]
 
     def _fail(self, text: str) -> None:
-        self.worker.cancel()
-        self.writer.abort()
-        self._restore_frame()
-        self.finished = True
+        self.cancel()
         raise BakeError(text)
 
     def _restore_frame(self) -> None:

@@ -68,6 +68,9 @@ class THINBURN_OT_bake(bpy.types.Operator):
         except BakeError as exc:
             self.report({"ERROR"}, f"ThinBurn: {exc}")
             return {"CANCELLED"}
+        except BaseException:
+            job.cancel()  # stop the worker, keep the previous bake, then let the error show
+            raise
         finally:
             _running.pop(context.scene.name, None)
         self.report({"INFO"}, job.message)
@@ -104,6 +107,10 @@ class THINBURN_OT_bake(bpy.types.Operator):
             self._end(context)
             self.report({"ERROR"}, f"ThinBurn: {exc}")
             return {"CANCELLED"}
+        except BaseException:
+            job.cancel()
+            self._end(context)
+            raise
         context.window_manager.progress_update(job.frames_done)
         context.workspace.status_text_set(
             f"ThinBurn: baking frame {job.current_frame} of {job.frames[0]}–{job.frames[-1]}  (Esc to cancel)")

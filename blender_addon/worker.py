@@ -54,9 +54,8 @@ def path_ignitions(start, end, t0: float, dt: float, spacing: float) -> list:
 class CoreWorker(threading.Thread):
     """Builds the Simulation, then runs the queued FrameTasks in order.
 
-    Messages on ``results`` (tuples): ("ready", info), ("frame", index, positions, lit,
-    particles or None), ("done", ignition_times, burnout_times), ("error", text),
-    ("cancelled",).
+    Messages on ``results`` (tuples): ("frame", index, positions, lit, particles or None),
+    ("done", ignition_times, burnout_times), ("error", text), ("cancelled",).
     """
 
     def __init__(self, make_simulation, dt: float, want_particles: bool):
@@ -75,7 +74,6 @@ class CoreWorker(threading.Thread):
     def run(self) -> None:
         try:
             sim = self._make_simulation()
-            self.results.put(("ready", {"cell_size": tuple(sim.cell_size), "cells": sim.cells}))
             while not self._cancel.is_set():
                 task = self.tasks.get()
                 if task is None or self._cancel.is_set():

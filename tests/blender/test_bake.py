@@ -272,3 +272,16 @@ def test_modal_bake_runs_on_timer_events_and_esc_cancels(addon, baked, tmp_path)
     ignite = point_attribute(baked, "thinburn_ignite_time")
     assert ignite[-1] == ignite.min() < ignite[0]
     assert status[-1] is None  # the status bar is given back
+
+
+def test_deleting_an_igniter_mid_bake_stops_cleanly(addon, baked, tmp_path):
+    path = tmp_path / "cache" / "Sheet.pc2"
+    before = path.read_bytes()
+    job = addon.job.BakeJob(bpy.context, baked)
+    job.tick()
+    bpy.data.objects.remove(bpy.data.objects["Igniter"])
+    with pytest.raises(addon.inputs.BakeError, match="'Igniter' was deleted"):
+        for _ in range(1000):
+            job.tick()
+    assert job.finished and not job.worker.is_alive()
+    assert path.read_bytes() == before and not (tmp_path / "cache" / "Sheet.pc2.partial").exists()
