@@ -14,7 +14,7 @@ import bpy
 import numpy as np
 import thinburn
 
-from . import cache, inputs, materials, properties
+from . import cache, fire, inputs, materials, properties
 from .inputs import BakeError
 from .worker import CoreWorker, FrameTask, path_ignitions
 
@@ -208,7 +208,7 @@ class BakeJob:
         burnout = cache.seconds_to_frames(burnout_s, start, self.fps)
         materials.apply_bake(obj, self.modifier_path, start, ignite, burnout)
         if self.want_particles:
-            materials.apply_particles(obj, self.abs_path, self.particle_frames, start)
+            fire.apply_particles(obj, self.modifier_path, self.particle_frames, start)
         obj.thinburn.baked_file = self.modifier_path
         self._restore_frame()
         self.finished = True

@@ -4,8 +4,6 @@ Only properties that the bake reads frame by frame are animatable (igniter stren
 and transform, the wind scale); the rest are read once at the bake's first frame and are
 not offered for keyframing, so the UI never suggests an animation the bake would ignore.
 """
-from __future__ import annotations
-
 import bpy
 import thinburn
 from bpy.props import (BoolProperty, EnumProperty, FloatProperty, IntProperty, PointerProperty,

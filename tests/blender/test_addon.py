@@ -78,7 +78,7 @@ def test_fire_particles_become_an_emitting_point_cloud(addon, tmp_path):
         frames.append((rng.uniform(-0.1, 0.1, size=(k, 3)).astype(np.float32),
                        np.linspace(900.0, 1500.0, k, dtype=np.float32)))
     pc2 = str(tmp_path / "Sheet.pc2")
-    addon.materials.apply_particles(sheet, pc2, frames, frame_start=1.0)
+    addon.fire.apply_particles(sheet, pc2, frames, frame_start=1.0)
     fire = bpy.data.objects["ThinBurn Fire Sheet"]
     head, data = addon.cache.read_pc2(tmp_path / "Sheet_fire.pc2")
     assert head["points"] == 10 and head["samples"] == 3
