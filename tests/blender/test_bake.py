@@ -285,3 +285,25 @@ def test_deleting_an_igniter_mid_bake_stops_cleanly(addon, baked, tmp_path):
             job.tick()
     assert job.finished and not job.worker.is_alive()
     assert path.read_bytes() == before and not (tmp_path / "cache" / "Sheet.pc2.partial").exists()
+
+
+def test_bake_writes_fire_particles_when_the_core_has_them(addon, tmp_path, monkeypatch):
+    """The guarded path for Simulation.particles(), with a core stand-in that has it."""
+    import thinburn
+
+    class WithParticles(thinburn.Simulation):
+        def particles(self):
+            k = int(round(self.time * 24)) % 3  # 0, 1, 2 particles, frame after frame
+            pos = np.tile([0.0, 0.0, 0.6], (k, 1)) + 0.01 * np.arange(k)[:, None]
+            return pos, np.full(k, 1000.0 + self.time)
+
+    monkeypatch.setattr(thinburn, "Simulation", WithParticles)
+    sheet = make_sheet()
+    setup_bake(sheet, frames=6, cache_dir=tmp_path)
+    make_igniter(sheet, (0.0, 0.0, 0.5))
+    assert bpy.ops.thinburn.bake() == {"FINISHED"}
+    head, data = addon.cache.read_pc2(tmp_path / "Sheet_fire.pc2")
+    assert head["samples"] == 6 and head["points"] == 4  # 2 slots: positions, then (T, alive, 0)
+    np.testing.assert_array_equal(data[:, 2:, 1], [[0, 0], [1, 0], [1, 1], [0, 0], [1, 0], [1, 1]])
+    fire = bpy.data.objects["ThinBurn Fire Sheet"]
+    assert fire.modifiers["ThinBurn Cache"].filepath.endswith("Sheet_fire.pc2")
