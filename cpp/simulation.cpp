@@ -1,5 +1,7 @@
 #include "simulation.hpp"
 
+#include <Eigen/Geometry>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -22,7 +24,7 @@ std::uint64_t mix(std::uint64_t x) {
 }  // namespace
 
 Simulation::Simulation(const RowMatX3& vertices, const RowMatX3i& faces, const RowMatX2& uv,
-                       const SimulationParams& params)
+                       const SimulationParams& params, const std::vector<std::uint8_t>& pinned)
     : params_(params),
       sheet_(vertices, faces, uv, params.cells),
       front_(params.cells, params.cells, sheet_.dv(), sheet_.du(), params.front) {
@@ -41,6 +43,9 @@ Simulation::Simulation(const RowMatX3& vertices, const RowMatX3i& faces, const R
     if (sheet_.inside()[c]) mass_[c] = cell_mass;
   }
   speed_fn_ = [this](int cell) { return local_speed(cell); };
+  if (!pinned.empty() && pinned.size() != static_cast<std::size_t>(vertices.rows()))
+    throw std::invalid_argument("pinned: one flag per vertex expected");
+  if (params.shell) build_shell(pinned);
 }
 
 double Simulation::hash_uniform(std::uint64_t stream, std::uint64_t key) const {
@@ -62,7 +67,31 @@ double Simulation::noise(int cell, std::uint64_t stream) const {
 }
 
 Eigen::Vector3d Simulation::cell_position(int cell) const {
-  return sheet_.cell_rest().row(cell).transpose();
+  // Rest position plus the lattice's displacement at the cell centre, mid-thickness: the same
+  // trilinear FFD as the mesh's vertices, evaluated for one point on demand, so only the cells
+  // the front and the emitters touch are ever deformed.
+  Eigen::Vector3d p = sheet_.cell_rest().row(cell).transpose();
+  if (!lattice_) return p;
+  const int N = sheet_.cells();
+  const Eigen::Vector2d st = sheet_.lattice_st((cell % N + 0.5) * sheet_.du(), (cell / N + 0.5) * sheet_.dv(), M_);
+  int cp[4];
+  double w[4];
+  bilinear_couples(st.x(), st.y(), cp, w);
+  const RowMatX3& x = lattice_->positions();
+  const RowMatX3& x0 = lattice_->rest();
+  for (int k = 0; k < 4; ++k)
+    p += (0.5 * w[k]) * (x.row(2 * cp[k]) - x0.row(2 * cp[k]) + x.row(2 * cp[k] + 1) - x0.row(2 * cp[k] + 1)).transpose();
+  return p;
+}
+
+Eigen::Vector3d Simulation::cell_normal(int cell) const {
+  if (!lattice_) return sheet_.cell_rest_normal().row(cell).transpose();
+  const int N = sheet_.cells(), r = cell / N, c = cell % N;
+  const int cl = std::max(c - 1, 0), cr = std::min(c + 1, N - 1), rd = std::max(r - 1, 0), ru = std::min(r + 1, N - 1);
+  const Eigen::Vector3d n = (cell_position(r * N + cr) - cell_position(r * N + cl))
+                                .cross(cell_position(ru * N + c) - cell_position(rd * N + c));
+  const double len = n.norm();
+  return len > 0 ? Eigen::Vector3d(n / len) : Eigen::Vector3d(sheet_.cell_rest_normal().row(cell).transpose());
 }
 
 double Simulation::grad2(int cell) const {
@@ -137,6 +166,7 @@ void Simulation::step(double dt) {
   }
   time_ = t_end;
   retire_burnt();
+  if (lattice_) step_shell(dt);
 }
 
 void Simulation::retire_burnt() {
@@ -146,6 +176,7 @@ void Simulation::retire_burnt() {
   for (int c : burning_) {
     if (arrival[c] + duration_[c] <= time_) {
       state_[c] = kBurnt;
+      if (lattice_) add_cell_mass(c, -(1.0 - keep) * mass_[c]);
       mass_[c] *= keep;
     } else {
       burning_[w++] = c;
@@ -195,7 +226,15 @@ RowMatX3 Simulation::cell_positions() const {
   return p;
 }
 
-RowMatX3 Simulation::vertex_positions() const { return sheet_.vertices(); }
+RowMatX3 Simulation::vertex_positions() const {
+  if (!lattice_) return sheet_.vertices();
+  RowMatX3 out(sheet_.vertices().rows(), 3);
+  lattice_->deform(vertex_embedding_, out);
+  // The lattice's bottom layer is held half a thickness below the floor; the surface itself
+  // never goes through it.
+  if (params_.has_floor) out.col(2) = out.col(2).cwiseMax(params_.floor_z);
+  return out;
+}
 
 Eigen::VectorXd Simulation::vertex_char() const {
   const std::vector<double> ch = cell_char();

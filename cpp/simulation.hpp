@@ -1,7 +1,11 @@
 #pragma once
-/// @brief The whole model, stepped in time: cells and fire front (paper §3), and the parts
-/// that later hook onto them.
+/// @brief The whole model, stepped in time: cells and fire front (paper §3), fire particles,
+/// heat and pyrolysis (§4.2), the FFD lattice and its motion (§4.1, §4.3).
+#include "bending.hpp"
+#include "dynamics.hpp"
 #include "fire_front.hpp"
+#include "lattice.hpp"
+#include "particles.hpp"
 #include "sheet.hpp"
 
 #include <Eigen/Core>
@@ -34,12 +38,22 @@ struct SimulationParams {
   // Mass: burnt cells lose mass and turn to ash.
   double areal_density = 0.045;  ///< kg/m^2
   double ash_fraction = 0.1;     ///< share of the mass a burnt cell keeps
+  // The shell: lattice, particles, bending and motion (paper §4). Off: the sheet keeps its rest shape.
+  bool shell = true;
+  int lattice = 0;               ///< M couples per side; 0 chooses from the sheet's size and N
+  double lattice_thickness = 0;  ///< m between a couple's two vertices; 0 chooses
+  bool has_floor = false;        ///< a horizontal floor (a table) under the sheet
+  double floor_z = 0.0;          ///< m, its height
+  DynamicsParams dynamics;
+  ParticleParams particles;
+  BendingParams bending;
 };
 
 class Simulation {
  public:
+  /// @param pinned per input vertex, nonzero = held in place (may be empty).
   Simulation(const RowMatX3& vertices, const RowMatX3i& faces, const RowMatX2& uv,
-             const SimulationParams& params);
+             const SimulationParams& params, const std::vector<std::uint8_t>& pinned = {});
 
   /// @brief Ignite the inside cells within radius of a point (the nearest one when radius is 0)
   /// at time t. Throws std::invalid_argument when no cell lies within reach of the point.
@@ -77,9 +91,32 @@ class Simulation {
   /// @brief grad² at a cell: squared slope of the current surface out of the rest plane.
   double grad2(int cell) const;
 
+  bool has_shell() const { return lattice_ != nullptr; }
+  int lattice_size() const { return M_; }
+  double lattice_thickness() const { return thickness_; }
+  /// @brief Control vertices ((2 M^2) x 3), index ((i*M)+j)*2+k, k = 1 top.
+  const RowMatX3& lattice_positions() const;
+  const Bending* bending() const { return bending_.get(); }
+  const FfdLattice* lattice() const { return lattice_.get(); }
+  const ParticleSystem* particles() const { return particles_.get(); }
+  const LatticeDynamics* dynamics() const { return dynamics_.get(); }
+  const StepStats& last_step_stats() const { return stats_; }
+  /// @brief Per-control-vertex masses now (kg).
+  const Eigen::VectorXd& control_masses() const { return control_mass_; }
+  void set_dynamics_params(const DynamicsParams& p);
+
  private:
   Eigen::Vector3d cell_position(int cell) const;
+  Eigen::Vector3d cell_normal(int cell) const;
   void retire_burnt();
+  void build_shell(const std::vector<std::uint8_t>& pinned);
+  RowMatX3 drape_lattice() const;
+  void bilinear_couples(double s, double t, int* couple, double* w) const;
+  void add_cell_mass(int cell, double dm);
+  void step_shell(double dt);
+  void emit_particles(double dt);
+  void update_pyrolysis();
+  double flame_side(int cell) const;
   double noise(int cell, std::uint64_t stream) const;
   double hash_uniform(std::uint64_t stream, std::uint64_t key) const;
 
@@ -94,6 +131,20 @@ class Simulation {
   std::vector<double> v_scale_;  // per-cell V0 multiplier (seeded noise)
   std::vector<double> mass_;
   std::vector<int> burning_;     // the cells burning now: an active list, never a sweep
+  std::vector<int> fringe_buf_;
+  // The shell (null when params.shell is off).
+  int M_ = 0;
+  double thickness_ = 0.0;
+  std::unique_ptr<FfdLattice> lattice_;
+  std::unique_ptr<LatticeDynamics> dynamics_;
+  std::unique_ptr<ParticleSystem> particles_;
+  std::unique_ptr<Bending> bending_;
+  Embedding vertex_embedding_;
+  Eigen::VectorXd control_mass_, control_area_;
+  bool mass_dirty_ = false;
+  StepStats stats_;
+  RowMatX3 emit_pos_, emit_normal_, ignition_pts_, particle_pos_;
+  Eigen::VectorXd emit_len_, particle_temp_, rotation_;
 };
 
 }  // namespace thinburn

@@ -48,6 +48,32 @@ py::dict params_dict(const ParticleParams& p) {
 
 }  // namespace
 
+void apply_particle_kwargs(ParticleParams& p, const py::dict& kw) {
+  for (const auto& item : kw) {
+    const std::string k = item.first.cast<std::string>();
+    double* d = k == "birth_rate"        ? &p.birth_rate
+                : k == "temperature0"    ? &p.temperature0
+                : k == "cooling"         ? &p.cooling
+                : k == "lifetime"        ? &p.lifetime
+                : k == "lifetime_jitter" ? &p.lifetime_jitter
+                : k == "buoyancy"        ? &p.buoyancy
+                : k == "drag"            ? &p.drag
+                : k == "turbulence"      ? &p.turbulence
+                : k == "birth_speed"     ? &p.birth_speed
+                : k == "vertical_band"   ? &p.vertical_band
+                                         : nullptr;
+    if (d)
+      *d = item.second.cast<double>();
+    else if (k == "capacity")
+      p.capacity = item.second.cast<int>();
+    else
+      throw py::type_error("unexpected particle parameter '" + k + "'");
+  }
+  validate(p);
+}
+
+py::dict particle_params_dict(const ParticleParams& p) { return params_dict(p); }
+
 void define_particles(py::module_& m) {
   const ParticleParams def;
   py::class_<ParticleSystem>(m, "ParticleSystem",

@@ -3,6 +3,7 @@
 #include <pybind11/numpy.h>
 #include <pybind11/stl.h>
 
+#include <cmath>
 #include <stdexcept>
 #include <string>
 
@@ -13,6 +14,8 @@ namespace py = pybind11;
 
 namespace thinburn::bind {
 namespace {
+
+void apply_bending_kwargs(BendingParams& b, const py::dict& kw);
 
 FrontMethod front_from_name(const std::string& name) {
   if (name == "cellular") return FrontMethod::Cellular8;
@@ -56,7 +59,41 @@ void define_params(py::module_& m) {
       .def_readwrite("wind_spread", &SimulationParams::wind_spread)
       .def_readwrite("max_drive", &SimulationParams::max_drive)
       .def_readwrite("areal_density", &SimulationParams::areal_density)
-      .def_readwrite("ash_fraction", &SimulationParams::ash_fraction);
+      .def_readwrite("ash_fraction", &SimulationParams::ash_fraction)
+      .def_readwrite("shell", &SimulationParams::shell)
+      .def_readwrite("lattice", &SimulationParams::lattice)
+      .def_readwrite("lattice_thickness", &SimulationParams::lattice_thickness)
+      .def_readwrite("has_floor", &SimulationParams::has_floor)
+      .def_readwrite("floor_z", &SimulationParams::floor_z)
+      .def("set_dynamics", [](SimulationParams& s, const py::dict& kw) { apply_dynamics_kwargs(s.dynamics, kw); })
+      .def("set_particles", [](SimulationParams& s, const py::dict& kw) { apply_particle_kwargs(s.particles, kw); })
+      .def("set_bending", [](SimulationParams& s, const py::dict& kw) { apply_bending_kwargs(s.bending, kw); })
+      .def_property_readonly("dynamics", [](const SimulationParams& s) { return dynamics_params_dict(s.dynamics); })
+      .def_property_readonly("particles", [](const SimulationParams& s) { return particle_params_dict(s.particles); })
+      .def_property_readonly("bending", [](const SimulationParams& s) {
+        const BendingParams& b = s.bending;
+        return py::dict(py::arg("ct") = b.ct, py::arg("cp") = b.cp, py::arg("alpha") = b.alpha,
+                        py::arg("beta") = b.beta, py::arg("d_min") = b.d_min,
+                        py::arg("heat_tolerance") = b.tolerance, py::arg("heat_fast") = b.fast);
+      });
+}
+
+void apply_bending_kwargs(BendingParams& b, const py::dict& kw) {
+  for (const auto& item : kw) {
+    const std::string k = item.first.cast<std::string>();
+    double* d = k == "ct" ? &b.ct : k == "cp" ? &b.cp : k == "alpha" ? &b.alpha : k == "beta" ? &b.beta
+              : k == "d_min" ? &b.d_min : k == "heat_tolerance" ? &b.tolerance : nullptr;
+    if (d)
+      *d = item.second.cast<double>();
+    else if (k == "heat_fast")
+      b.fast = item.second.cast<bool>();
+    else
+      throw py::type_error("unexpected bending parameter '" + k + "'");
+  }
+  if (!(b.d_min > 0)) throw std::invalid_argument("d_min must be > 0");
+  if (!(b.tolerance > 0 && b.tolerance < 1)) throw std::invalid_argument("heat_tolerance must be in (0, 1)");
+  if (!(b.ct >= 0) || !(b.cp >= 0)) throw std::invalid_argument("ct and cp must be >= 0");
+  if (!std::isfinite(b.alpha) || !std::isfinite(b.beta)) throw std::invalid_argument("alpha and beta must be finite");
 }
 
 }  // namespace
@@ -65,11 +102,12 @@ void define_simulation(py::module_& m) {
   define_params(m);
   using S = Simulation;
   py::class_<S>(m, "Simulation", "The burning sheet, stepped in time.")
-      .def(py::init([](const RowMatX3& v, const RowMatX3i& f, const RowMatX2& uv, const SimulationParams& p) {
+      .def(py::init([](const RowMatX3& v, const RowMatX3i& f, const RowMatX2& uv, const SimulationParams& p,
+                       const std::vector<std::uint8_t>& pinned) {
              py::gil_scoped_release release;
-             return new S(v, f, uv, p);
+             return new S(v, f, uv, p, pinned);
            }),
-           py::arg("vertices"), py::arg("faces"), py::arg("uv"), py::arg("params"))
+           py::arg("vertices"), py::arg("faces"), py::arg("uv"), py::arg("params"), py::arg("pinned"))
       .def("ignite", &S::ignite, py::arg("point"), py::arg("time"), py::arg("radius"),
            py::call_guard<py::gil_scoped_release>())
       .def("step", &S::step, py::arg("dt"), py::call_guard<py::gil_scoped_release>())
@@ -108,6 +146,38 @@ void define_simulation(py::module_& m) {
            py::arg("cell"))
       .def("front_active", &S::front_active)
       .def("num_burning", &S::num_burning)
+      .def_property_readonly("has_shell", &S::has_shell)
+      .def_property_readonly("lattice_size", &S::lattice_size)
+      .def_property_readonly("lattice_thickness", &S::lattice_thickness)
+      .def("lattice_positions", &S::lattice_positions)
+      .def("lattice_rest_positions", [](const S& s) { return s.lattice() ? s.lattice()->rest() : RowMatX3(0, 3); })
+      .def("control_masses", &S::control_masses)
+      .def("heat", [](const S& s) { return s.bending() ? s.bending()->heat() : Eigen::VectorXd(); })
+      .def("pyrolysis", [](const S& s) { return s.bending() ? s.bending()->pyrolysis() : Eigen::VectorXd(); })
+      .def("rotation", [](const S& s) {
+        Eigen::VectorXd d;
+        if (s.bending()) s.bending()->rotation(d);
+        return d;
+      })
+      .def("particles",
+           [](const S& s) {
+             if (!s.particles()) return py::make_tuple(RowMatX3(0, 3), Eigen::VectorXd(0));
+             return py::make_tuple(RowMatX3(s.particles()->positions()), Eigen::VectorXd(s.particles()->temperatures()));
+           })
+      .def("particle_velocities",
+           [](const S& s) { return s.particles() ? RowMatX3(s.particles()->velocities()) : RowMatX3(0, 3); })
+      .def_property_readonly("particles_dropped", [](const S& s) { return s.particles() ? s.particles()->dropped() : 0; })
+      .def("set_dynamics", [](S& s, const py::dict& kw) {
+        DynamicsParams p = s.params().dynamics;
+        apply_dynamics_kwargs(p, kw);
+        s.set_dynamics_params(p);
+      })
+      .def("step_stats", [](const S& s) {
+        const StepStats& t = s.last_step_stats();
+        return py::dict(py::arg("substeps") = t.substeps, py::arg("awake") = t.awake,
+                        py::arg("cg_iterations") = t.cg_iterations, py::arg("omega_max") = t.omega_max,
+                        py::arg("passes") = t.passes);
+      })
       .def("frame", [](const S& s) {
         const SheetFrame& f = s.sheet().frame();
         return py::make_tuple(f.origin, f.u, f.v, f.n);

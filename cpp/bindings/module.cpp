@@ -8,4 +8,6 @@ PYBIND11_MODULE(_core, m) {
   thinburn::bind::define_simulation(m);
   thinburn::bind::define_particles(m);
   thinburn::bind::define_heat(m);
+  thinburn::bind::define_lattice(m);
+  thinburn::bind::define_dynamics(m);
 }

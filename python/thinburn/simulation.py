@@ -10,6 +10,19 @@ from .materials import Material, resolve_material
 
 FRONT_METHODS = ("cellular", "cellular16", "fmm1", "fmm")
 
+INTEGRATORS = ("implicit", "symplectic", "explicit")
+
+# Keyword overrides of the shell's parts, passed on to the core's parameter groups (which
+# validate them and name the field in their errors). See docs/dynamics.md, docs/particles.md,
+# docs/bending.md for units and meanings.
+DYNAMICS_KEYS = ("k_thickness", "k_transverse", "stiffness_unit", "buoyancy", "wind_drag", "friction",
+                 "crumple_gain", "plasticity", "sleep_speed", "sleeping", "substeps", "max_substeps",
+                 "safety", "max_stretch", "cg_tolerance", "cg_max_iterations", "gravity")
+BENDING_KEYS = ("ct", "alpha", "beta", "d_min", "heat_tolerance", "heat_fast")
+PARTICLE_PREFIX = "particle_"
+PARTICLE_KEYS = ("capacity", "birth_rate", "temperature0", "cooling", "lifetime", "lifetime_jitter",
+                 "buoyancy", "drag", "turbulence", "birth_speed", "vertical_band")
+
 # Keyword overrides accepted by Simulation(**params), with their bounds.
 _PARAM_BOUNDS = {
     "cv": dict(low=0.0),
@@ -39,14 +52,35 @@ class Simulation:
     front : fire-front method, one of ``FRONT_METHODS``: "fmm" (second-order fast marching,
         the default, converges), "fmm1", "cellular" (the paper's 8-neighbour rule) or
         "cellular16".
-    **params : overrides of the model's scalars: ``cv``, ``v_floor``, ``speed_noise``,
-        ``duration_noise``, ``climb`` (flames climb: drive toward world-up, 0 = the paper's
-        symmetric law), ``wind_spread`` (front drive per m/s of wind), ``max_drive``,
-        ``ash_fraction``.
+    lattice : M, the FFD lattice has M×M couples (None: chosen from the sheet's size and
+        ``cells``, see docs/lattice.md).
+    pinned : None, a boolean mask (n,) or an index array of input vertices held in place.
+    floor : None or the height (m) of a horizontal floor with friction under the sheet.
+    integrator : "implicit" (backward Euler, the default), "symplectic" or "explicit" (the
+        paper's eqs 13-15); explicit ones substep as stability needs or raise.
+    shell : False switches the paper's §4 off: no lattice, particles or motion; the sheet keeps
+        its rest shape and only the fire runs.
+    **params : overrides of the model's scalars:
+
+        * the fire: ``cv``, ``v_floor``, ``speed_noise``, ``duration_noise``, ``climb``
+          (flames climb: drive toward world-up, 0 = the paper's symmetric law),
+          ``wind_spread`` (front drive per m/s of wind), ``max_drive``, ``ash_fraction``;
+        * the bending (eqs 2-6): ``ct``, ``alpha``, ``beta``, ``d_min``,
+          ``heat_tolerance``, ``heat_fast``;
+        * the motion: ``k_thickness``, ``k_transverse``, ``stiffness_unit``, ``buoyancy``,
+          ``wind_drag``, ``friction``, ``crumple_gain``, ``plasticity``, ``sleep_speed``,
+          ``sleeping``, ``substeps``, ``max_substeps``, ``safety``, ``max_stretch``,
+          ``cg_tolerance``, ``cg_max_iterations``, ``gravity``;
+        * the particles, prefixed ``particle_``: ``particle_capacity``,
+          ``particle_birth_rate``, ``particle_temperature0``, ``particle_cooling``,
+          ``particle_lifetime``, ``particle_lifetime_jitter``, ``particle_buoyancy``,
+          ``particle_drag``, ``particle_turbulence``, ``particle_birth_speed``,
+          ``particle_vertical_band``.
     """
 
     def __init__(self, vertices, faces, uv=None, material="paper", cells=128, seed=0,
-                 threads=None, front="fmm", **params):
+                 threads=None, front="fmm", lattice=None, pinned=None, floor=None,
+                 integrator="implicit", shell=True, **params):
         verts = V.real_array(vertices, "vertices", (-1, 3))
         if len(verts) < 3:
             raise ValueError(f"vertices: an empty mesh (need >= 3 vertices, got {len(verts)})")
@@ -59,12 +93,45 @@ class Simulation:
         p = self._params(self.material, V.integer(cells, "cells", low=2, high=4096),
                          V.integer(seed, "seed", low=0, high=2**63 - 1),
                          V.choice(front, "front", FRONT_METHODS), params)
-        self._sim = _core.Simulation(verts, tris, uvs, p)
+        if not isinstance(shell, bool):
+            raise TypeError(f"shell must be a bool, got {type(shell).__name__}")
+        p.shell = shell
+        if lattice is not None:
+            p.lattice = V.integer(lattice, "lattice", low=2, high=257)
+        if floor is not None:
+            p.has_floor, p.floor_z = True, V.real(floor, "floor")
+            if float(verts[:, 2].min()) < p.floor_z - 1e-9:
+                raise ValueError(f"floor: the sheet reaches below the floor (z min "
+                                 f"{verts[:, 2].min():.6g} < floor {p.floor_z:.6g})")
+        _set_group(p.set_dynamics, "integrator", {"integrator": V.choice(integrator, "integrator", INTEGRATORS)})
+        pins = _pinned_mask(pinned, len(verts))
+        self._sim = _core.Simulation(verts, tris, uvs, p, pins)
         self.params = p
         self.n_vertices = len(verts)
 
     @staticmethod
     def _params(mat: Material, cells: int, seed: int, front: str, overrides: dict):
+        overrides = dict(overrides)
+        groups = {"dynamics": {}, "bending": {}, "particles": {}}
+        for key in list(overrides):
+            if key in DYNAMICS_KEYS:
+                groups["dynamics"][key] = overrides.pop(key)
+            elif key in BENDING_KEYS:
+                groups["bending"][key] = overrides.pop(key)
+            elif key.startswith(PARTICLE_PREFIX) and key[len(PARTICLE_PREFIX):] in PARTICLE_KEYS:
+                groups["particles"][key[len(PARTICLE_PREFIX):]] = overrides.pop(key)
+        p = Simulation._fire_params(mat, cells, seed, front, overrides)
+        material_dynamics = dict(k_structure=mat.K_structure, k_shear=mat.K_shear, k_flex=mat.K_flex,
+                                 c_damping=mat.C_damping, k_transverse=mat.K_structure)
+        _set_group(p.set_dynamics, "material", material_dynamics)
+        _set_group(p.set_bending, "material", dict(cp=mat.Cp, alpha=mat.alpha, beta=mat.beta))
+        _set_group(p.set_dynamics, None, groups["dynamics"])
+        _set_group(p.set_bending, None, groups["bending"])
+        _set_group(p.set_particles, PARTICLE_PREFIX, groups["particles"])
+        return p
+
+    @staticmethod
+    def _fire_params(mat: Material, cells: int, seed: int, front: str, overrides: dict):
         p = _core.SimulationParams()
         p.cells, p.seed, p.front = cells, seed, front
         p.v0 = V.real(mat.v0, "material.V0", low=0.0, low_open=True)
@@ -76,8 +143,10 @@ class Simulation:
         p.ash_fraction = V.real(mat.ash_fraction, "material.ash_fraction", low=0.0, high=1.0)
         for key, value in overrides.items():
             if key not in _PARAM_BOUNDS:
+                known = sorted(_PARAM_BOUNDS) + list(DYNAMICS_KEYS) + list(BENDING_KEYS) + [
+                    PARTICLE_PREFIX + k for k in PARTICLE_KEYS]
                 raise TypeError(f"Simulation() got an unexpected keyword argument {key!r}; "
-                                f"model parameters are {sorted(_PARAM_BOUNDS)}")
+                                f"model parameters are {known}")
             setattr(p, key, V.real(value, key, **_PARAM_BOUNDS[key]))
         return p
 
@@ -130,6 +199,75 @@ class Simulation:
     @threads.setter
     def threads(self, value) -> None:
         self._threads = set_threads(value)
+
+    # --- the shell ----------------------------------------------------------------------
+    @property
+    def lattice_size(self) -> int:
+        """M: the lattice has M×M couples (0 without a shell)."""
+        return self._sim.lattice_size
+
+    @property
+    def lattice_thickness(self) -> float:
+        """Distance between a couple's top and bottom control vertices, m."""
+        return self._sim.lattice_thickness
+
+    def lattice_positions(self) -> np.ndarray:
+        """(M, M, 2, 3) control vertices: [row, column, 0 bottom / 1 top, xyz]."""
+        m = self._require_shell("lattice_positions")
+        return self._sim.lattice_positions().reshape(m, m, 2, 3)
+
+    def lattice_rest_positions(self) -> np.ndarray:
+        """(M, M, 2, 3) control vertices at rest."""
+        m = self._require_shell("lattice_rest_positions")
+        return self._sim.lattice_rest_positions().reshape(m, m, 2, 3)
+
+    def heat(self) -> np.ndarray:
+        """(M, M, 2) heat accumulated at the control vertices (eq 2)."""
+        m = self._require_shell("heat")
+        return self._sim.heat().reshape(m, m, 2)
+
+    def pyrolysis(self) -> np.ndarray:
+        """(M, M, 2) pyrolysis at the control vertices now (eq 3)."""
+        m = self._require_shell("pyrolysis")
+        return self._sim.pyrolysis().reshape(m, m, 2)
+
+    def rotation(self) -> np.ndarray:
+        """(M, M) the rotation D per couple (eqs 4-6), radians."""
+        m = self._require_shell("rotation")
+        return self._sim.rotation().reshape(m, m)
+
+    def control_masses(self) -> np.ndarray:
+        """(M, M, 2) sheet mass mapped onto each control vertex, kg (falls as cells burn)."""
+        m = self._require_shell("control_masses")
+        return self._sim.control_masses().reshape(m, m, 2)
+
+    def particles(self):
+        """(positions (k, 3), temperatures (k,)) of the live fire particles."""
+        return self._sim.particles()
+
+    def particle_velocities(self) -> np.ndarray:
+        """(k, 3) velocities of the live fire particles, m/s."""
+        return self._sim.particle_velocities()
+
+    def set_dynamics(self, **params) -> None:
+        """Change motion parameters between steps (the DYNAMICS_KEYS and ``integrator``)."""
+        self._require_shell("set_dynamics")
+        for key in params:
+            if key not in DYNAMICS_KEYS and key != "integrator":
+                raise TypeError(f"set_dynamics() got an unexpected keyword argument {key!r}")
+        if "integrator" in params:
+            V.choice(params["integrator"], "integrator", INTEGRATORS)
+        _set_group(self._sim.set_dynamics, None, params)
+
+    def step_stats(self) -> dict:
+        """What the last step's motion did: substeps, awake vertices, CG iterations, ω bound."""
+        self._require_shell("step_stats")
+        return dict(self._sim.step_stats())
+
+    def _require_shell(self, what: str) -> int:
+        if not self._sim.has_shell:
+            raise ValueError(f"{what}: this simulation was made with shell=False")
+        return self._sim.lattice_size
 
     # --- results -------------------------------------------------------------------------
     @property
@@ -208,4 +346,40 @@ class Simulation:
 
     def stats(self) -> dict:
         """Sizes of the active sets now: what a step costs."""
-        return {"front_active": self._sim.front_active(), "burning": self._sim.num_burning()}
+        out = {"front_active": self._sim.front_active(), "burning": self._sim.num_burning(),
+               "fringe": int(len(self._sim.fringe()))}
+        if self._sim.has_shell:
+            out.update(self._sim.step_stats())
+            out["particles"] = int(len(self._sim.particles()[1]))
+        return out
+
+
+def _set_group(setter, prefix, values: dict) -> None:
+    """Apply a parameter group; the core's errors get the user's name for the argument."""
+    if not values:
+        return
+    try:
+        setter(values)
+    except (ValueError, TypeError) as exc:
+        msg = str(exc)
+        if prefix and prefix not in ("material", "integrator"):
+            for key in values:
+                msg = msg.replace(key, prefix + key) if (prefix + key) not in msg else msg
+        if prefix == "material":
+            msg = f"material: {msg}"
+        raise type(exc)(msg) from None
+
+
+def _pinned_mask(pinned, n: int) -> np.ndarray:
+    """A uint8 flag per vertex from None, a boolean mask or an index array."""
+    if pinned is None:
+        return np.zeros(0, dtype=np.uint8)
+    a = np.asarray(pinned)
+    if a.dtype == bool:
+        if a.shape != (n,):
+            raise ValueError(f"pinned has invalid shape: a boolean mask needs ({n},), got {a.shape}")
+        return a.astype(np.uint8)
+    idx = V.index_array(a, "pinned", (-1,), n)
+    mask = np.zeros(n, dtype=np.uint8)
+    mask[idx] = 1
+    return mask

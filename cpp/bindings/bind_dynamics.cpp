@@ -1,0 +1,241 @@
+#include <pybind11/eigen.h>
+#include <pybind11/numpy.h>
+#include <pybind11/stl.h>
+
+#include <string>
+
+#include "bindings.hpp"
+#include "crumple.hpp"
+#include "dynamics.hpp"
+
+namespace py = pybind11;
+using namespace pybind11::literals;
+
+namespace thinburn::bind {
+namespace {
+
+Integrator parse_integrator(const py::handle& h) {
+  if (py::isinstance<Integrator>(h)) return h.cast<Integrator>();
+  if (!py::isinstance<py::str>(h)) throw py::type_error("integrator must be a str or Integrator");
+  const std::string s = h.cast<std::string>();
+  if (s == "explicit") return Integrator::Explicit;
+  if (s == "symplectic") return Integrator::Symplectic;
+  if (s == "implicit") return Integrator::Implicit;
+  throw std::invalid_argument("integrator must be 'explicit', 'symplectic' or 'implicit', got '" +
+                              s + "'");
+}
+
+double as_double(const std::string& key, const py::handle& h) {
+  if (py::isinstance<py::bool_>(h) || !(py::isinstance<py::float_>(h) || py::isinstance<py::int_>(h) ||
+                                        py::hasattr(h, "__float__")))
+    throw py::type_error(key + " must be a number");
+  return h.cast<double>();
+}
+
+bool as_bool(const std::string& key, const py::handle& h) {
+  if (!py::isinstance<py::bool_>(h)) throw py::type_error(key + " must be a bool");
+  return h.cast<bool>();
+}
+
+int as_int(const std::string& key, const py::handle& h) {
+  if (py::isinstance<py::bool_>(h) || !py::isinstance<py::int_>(h))
+    throw py::type_error(key + " must be an int");
+  return h.cast<int>();
+}
+
+// Apply keyword arguments to p; unknown names raise TypeError naming them.
+void apply_kwargs(DynamicsParams& p, const py::kwargs& kw) {
+  for (const auto& item : kw) {
+    const std::string k = item.first.cast<std::string>();
+    const py::handle v = item.second;
+    double* dfield = k == "k_structure"      ? &p.k_structure
+                     : k == "k_shear"        ? &p.k_shear
+                     : k == "k_flex"         ? &p.k_flex
+                     : k == "k_thickness"    ? &p.k_thickness
+                     : k == "k_transverse"   ? &p.k_transverse
+                     : k == "stiffness_unit" ? &p.stiffness_unit
+                     : k == "c_damping"      ? &p.c_damping
+                     : k == "buoyancy"       ? &p.buoyancy
+                     : k == "wind_drag"      ? &p.wind_drag
+                     : k == "floor_z"        ? &p.floor_z
+                     : k == "friction"       ? &p.friction
+                     : k == "crumple_gain"   ? &p.crumple_gain
+                     : k == "plasticity"     ? &p.plasticity
+                     : k == "sleep_speed"    ? &p.sleep_speed
+                     : k == "safety"         ? &p.safety
+                     : k == "max_stretch"    ? &p.max_stretch
+                     : k == "cg_tolerance"   ? &p.cg_tolerance
+                     : k == "cg_velocity_tolerance" ? &p.cg_velocity_tolerance
+                                             : nullptr;
+    bool* bfield = k == "has_floor" ? &p.has_floor : k == "sleeping" ? &p.sleeping : nullptr;
+    int* ifield = k == "substeps"            ? &p.substeps
+                  : k == "max_substeps"      ? &p.max_substeps
+                  : k == "cg_max_iterations" ? &p.cg_max_iterations
+                                             : nullptr;
+    if (dfield)
+      *dfield = as_double(k, v);
+    else if (bfield)
+      *bfield = as_bool(k, v);
+    else if (ifield)
+      *ifield = as_int(k, v);
+    else if (k == "integrator")
+      p.integrator = parse_integrator(v);
+    else if (k == "gravity") {
+      const auto g = v.cast<std::vector<double>>();
+      if (g.size() != 3) throw std::invalid_argument("gravity must have 3 components");
+      p.gravity = Eigen::Vector3d(g[0], g[1], g[2]);
+    } else
+      throw py::type_error("unexpected keyword argument '" + k + "'");
+  }
+  validate(p);
+}
+
+py::dict params_dict(const DynamicsParams& p) {
+  const char* names[] = {"explicit", "symplectic", "implicit"};
+  return py::dict("k_structure"_a = p.k_structure, "k_shear"_a = p.k_shear, "k_flex"_a = p.k_flex,
+                  "k_thickness"_a = p.k_thickness, "k_transverse"_a = p.k_transverse,
+                  "stiffness_unit"_a = p.stiffness_unit,
+                  "c_damping"_a = p.c_damping,
+                  "gravity"_a = py::make_tuple(p.gravity.x(), p.gravity.y(), p.gravity.z()),
+                  "buoyancy"_a = p.buoyancy, "wind_drag"_a = p.wind_drag,
+                  "has_floor"_a = p.has_floor, "floor_z"_a = p.floor_z, "friction"_a = p.friction,
+                  "integrator"_a = names[int(p.integrator)], "crumple_gain"_a = p.crumple_gain,
+                  "plasticity"_a = p.plasticity, "sleep_speed"_a = p.sleep_speed,
+                  "sleeping"_a = p.sleeping, "substeps"_a = p.substeps,
+                  "max_substeps"_a = p.max_substeps, "safety"_a = p.safety,
+                  "max_stretch"_a = p.max_stretch, "cg_tolerance"_a = p.cg_tolerance,
+                  "cg_velocity_tolerance"_a = p.cg_velocity_tolerance,
+                  "cg_max_iterations"_a = p.cg_max_iterations);
+}
+
+std::vector<std::uint8_t> as_flags(const py::array_t<std::uint8_t, py::array::forcecast>& a) {
+  if (a.ndim() != 1) throw std::invalid_argument("pinned must be a 1-d array");
+  return std::vector<std::uint8_t>(a.data(), a.data() + a.size());
+}
+
+Eigen::Vector3d as_vec3(const std::vector<double>& w, const char* name) {
+  if (w.size() != 3) throw std::invalid_argument(std::string(name) + " must have 3 components");
+  return Eigen::Vector3d(w[0], w[1], w[2]);
+}
+
+}  // namespace
+
+void apply_dynamics_kwargs(DynamicsParams& p, const py::dict& kw) {
+  apply_kwargs(p, py::reinterpret_borrow<py::kwargs>(kw));
+}
+
+py::dict dynamics_params_dict(const DynamicsParams& p) { return params_dict(p); }
+
+void define_dynamics(py::module_& m) {
+  py::enum_<Integrator>(m, "Integrator", "Time integrator of the lattice.")
+      .value("Explicit", Integrator::Explicit, "The paper's eqs 13-15.")
+      .value("Symplectic", Integrator::Symplectic, "Symplectic Euler.")
+      .value("Implicit", Integrator::Implicit, "Backward Euler with conjugate gradients.");
+
+  py::class_<StepStats>(m, "StepStats", "What one step did.")
+      .def_readonly("substeps", &StepStats::substeps)
+      .def_readonly("awake", &StepStats::awake, "Vertices integrated.")
+      .def_readonly("cg_iterations", &StepStats::cg_iterations)
+      .def_readonly("omega_max", &StepStats::omega_max, "rad/s, bound on the largest frequency.")
+      .def_readonly("passes", &StepStats::passes)
+      .def("__repr__", [](const StepStats& s) {
+        return "StepStats(substeps=" + std::to_string(s.substeps) + ", awake=" +
+               std::to_string(s.awake) + ", cg_iterations=" + std::to_string(s.cg_iterations) +
+               ", omega_max=" + std::to_string(s.omega_max) + ", passes=" +
+               std::to_string(s.passes) + ")";
+      });
+
+  py::class_<LatticeDynamics>(m, "LatticeDynamics",
+                              "Springs, forces and integration of an FfdLattice's control "
+                              "vertices (Liu et al. 2009 §4.3). Keyword arguments are the "
+                              "DynamicsParams fields (see docs/dynamics.md).")
+      .def(py::init([](FfdLattice& lattice, const py::kwargs& kw) {
+             DynamicsParams p;
+             apply_kwargs(p, kw);
+             return new LatticeDynamics(lattice, p);
+           }),
+           "lattice"_a, py::keep_alive<1, 2>())
+      .def(
+          "set_params",
+          [](LatticeDynamics& self, const py::kwargs& kw) {
+            DynamicsParams p = self.params();
+            apply_kwargs(p, kw);
+            self.set_params(p);
+          },
+          "Change the named parameters; the others keep their values.")
+      .def_property_readonly("params", [](const LatticeDynamics& s) { return params_dict(s.params()); })
+      .def("set_masses", &LatticeDynamics::set_masses, "masses"_a,
+           "kg per control vertex (> 0); vertices whose mass changed wake.")
+      .def("set_areas", &LatticeDynamics::set_areas, "areas"_a,
+           "m^2 of sheet mapped to each control vertex (>= 0), for the wind pressure.")
+      .def(
+          "set_pinned",
+          [](LatticeDynamics& s, const py::array_t<std::uint8_t, py::array::forcecast>& a) {
+            s.set_pinned(as_flags(a));
+          },
+          "pinned"_a, "Per control vertex; pinned ones never move.")
+      .def(
+          "set_wind", [](LatticeDynamics& s, const std::vector<double>& w) { s.set_wind(as_vec3(w, "wind")); },
+          "wind"_a, "Wind velocity, m/s.")
+      .def("set_state", &LatticeDynamics::set_state, "positions"_a, "velocities"_a,
+           "Set positions and velocities ((2 M^2) x 3 each); everything wakes.")
+      .def(
+          "step",
+          [](LatticeDynamics& s, double dt, const Eigen::VectorXd& D, const Eigen::VectorXd& heat) {
+            py::gil_scoped_release release;
+            return s.step(dt, D, heat);
+          },
+          "dt"_a, "D"_a, "heat"_a,
+          "Advance by dt (s). D: per couple (M^2) total rotation so far (rad); its increase since "
+          "the previous step becomes the crumple. heat: per control vertex, drives buoyancy. "
+          "Raises RuntimeError if an explicit integrator needs more than max_substeps.")
+      .def_property_readonly("velocities", [](const LatticeDynamics& s) { return RowMatX3(s.velocities()); })
+      .def_property_readonly("awake", [](const LatticeDynamics& s) {
+        const auto a = s.awake();
+        py::array_t<bool> out(a.size());
+        for (std::size_t i = 0; i < a.size(); ++i) out.mutable_data()[i] = a[i] != 0;
+        return out;
+      }, "Per vertex: awake (integrated by the next step) or asleep.")
+      .def("forces", &LatticeDynamics::forces,
+           "Total force per vertex at the current state (the crumple is a prescribed motion, not in it).")
+      .def(
+          "stiffness_matrix",
+          [](const LatticeDynamics& s) { return Eigen::MatrixXd(s.stiffness_matrix()); },
+          "Exact Jacobian of the spring forces w.r.t. positions, dense (6 M^2) x (6 M^2) (for tests).")
+      .def("energy", &LatticeDynamics::energy, "Elastic energy of the springs, J.")
+      .def("max_frequency", &LatticeDynamics::max_frequency,
+           "Upper bound (block Gershgorin) on the largest frequency of M^-1 K, rad/s.")
+      .def_property_readonly("rest_lengths", [](const LatticeDynamics& s) { return s.rest_lengths(); })
+      .def_property_readonly("spring_pairs", &LatticeDynamics::spring_pairs)
+      .def_property_readonly("spring_kinds", [](const LatticeDynamics& s) {
+        const auto& k = s.spring_kinds();
+        py::array_t<std::uint8_t> out(k.size());
+        std::copy(k.begin(), k.end(), out.mutable_data());
+        return out;
+      }, "0 structure, 1 shear, 2 flex, 3 thickness (top-bottom), 4 transverse (diagonals).");
+
+  m.def(
+      "explicit_stability_limit",
+      [](const py::handle& integ, double omega, double c) {
+        return explicit_stability_limit(parse_integrator(integ), omega, c);
+      },
+      "integrator"_a, "omega"_a, "c"_a = 0.0,
+      "Largest stable substep of an explicit integrator on modes up to omega with damping c.");
+  m.def(
+      "crumple_displacements",
+      [](int M, const RowMatX3& pos, const Eigen::VectorXd& delta,
+         const py::array_t<std::uint8_t, py::array::forcecast>& pinned) {
+        if (M < 2 || pos.rows() != 2 * M * M)
+          throw std::invalid_argument("pos must have 2*M*M rows");
+        if (delta.size() != M * M) throw std::invalid_argument("delta must have M*M entries");
+        auto flags = as_flags(pinned);
+        if (int(flags.size()) != 2 * M * M) throw std::invalid_argument("pinned must have 2*M*M entries");
+        RowMatX3 out;
+        crumple_displacements(M, pos, delta, flags, out);
+        return out;
+      },
+      "M"_a, "positions"_a, "delta"_a, "pinned"_a,
+      "Chord displacement of every control vertex for per-couple rotation increments (eqs 7-8).");
+}
+
+}  // namespace thinburn::bind

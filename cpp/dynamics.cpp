@@ -1,0 +1,859 @@
+#include "dynamics.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+#include <Eigen/Geometry>
+#include <Eigen/LU>
+
+#include "crumple.hpp"
+#include "threads.hpp"
+
+namespace thinburn {
+namespace {
+
+constexpr int kDotChunk = 4096;
+constexpr int kParallelMin = 1024;  // below this many items a loop runs on one thread
+constexpr int kMaxPasses = 4;
+
+void require(bool ok, const std::string& what) {
+  if (!ok) throw std::invalid_argument(what);
+}
+
+// Spring Jacobian block J (symmetric 3x3) with f_a = -J (x_a - x_b) to first order.
+// clamp: drop the negative part of the geometric term so that J stays positive semidefinite.
+Eigen::Matrix3d spring_block(const Eigen::Vector3d& d, double k, double rest, bool clamp) {
+  const double l = d.norm();
+  if (!(l > 1e-300)) return k * Eigen::Matrix3d::Identity();
+  const Eigen::Vector3d u = d / l;
+  double g = 1.0 - rest / l;
+  if (clamp) g = std::max(g, 0.0);
+  const Eigen::Matrix3d uu = u * u.transpose();
+  return k * (uu + g * (Eigen::Matrix3d::Identity() - uu));
+}
+
+// Amplification matrix of one substep h on the mode x'' = -w^2 x - c x'.
+Eigen::Matrix2d amplification(Integrator integ, double h, double w, double c) {
+  const double w2h = w * w * h;
+  Eigen::Matrix2d G;
+  if (integ == Integrator::Symplectic)
+    G << 1.0 - w2h * h, h * (1.0 - c * h), -w2h, 1.0 - c * h;
+  else  // the paper's scheme: x' = x + h v' + h^2 a / 2 = x + h v + 3/2 h^2 a
+    G << 1.0 - 1.5 * w2h * h, h - 1.5 * c * h * h, -w2h, 1.0 - c * h;
+  return G;
+}
+
+double spectral_radius(const Eigen::Matrix2d& G) {
+  const double t = G.trace(), d = G.determinant();
+  const double disc = t * t - 4.0 * d;
+  if (disc >= 0.0) return 0.5 * (std::abs(t) + std::sqrt(disc));
+  return std::sqrt(std::abs(d));
+}
+
+bool stable(Integrator integ, double h, double w, double c) {
+  return spectral_radius(amplification(integ, h, w, c)) <= 1.0 + 1e-12 &&
+         spectral_radius(amplification(integ, h, 0.0, c)) <= 1.0 + 1e-12;
+}
+
+}  // namespace
+
+/// Largest h for which an explicit scheme is stable on every mode up to w with damping c.
+double explicit_stability_limit(Integrator integ, double w, double c) {
+  if (w <= 0.0 && c <= 0.0) return std::numeric_limits<double>::infinity();
+  double lo = 0.0, hi = 1.0 / (w + c);
+  while (stable(integ, hi, w, c)) {
+    lo = hi;
+    hi *= 2.0;
+  }
+  for (int it = 0; it < 100; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    (stable(integ, mid, w, c) ? lo : hi) = mid;
+  }
+  return lo;
+}
+
+void validate(const DynamicsParams& p) {
+  auto nonneg = [](double x, const char* name) {
+    require(std::isfinite(x) && x >= 0.0,
+            std::string(name) + " must be finite and >= 0, got " + std::to_string(x));
+  };
+  nonneg(p.k_structure, "k_structure");
+  nonneg(p.k_shear, "k_shear");
+  nonneg(p.k_flex, "k_flex");
+  nonneg(p.k_thickness, "k_thickness");
+  nonneg(p.k_transverse, "k_transverse");
+  nonneg(p.stiffness_unit, "stiffness_unit");
+  nonneg(p.c_damping, "c_damping");
+  nonneg(p.wind_drag, "wind_drag");
+  nonneg(p.friction, "friction");
+  nonneg(p.sleep_speed, "sleep_speed");
+  require(p.gravity.allFinite(), "gravity must be finite");
+  require(std::isfinite(p.buoyancy), "buoyancy must be finite");
+  require(std::isfinite(p.floor_z), "floor_z must be finite");
+  require(std::isfinite(p.crumple_gain), "crumple_gain must be finite");
+  require(p.plasticity >= 0.0 && p.plasticity <= 1.0, "plasticity must be in [0, 1]");
+  require(p.substeps >= 0, "substeps must be >= 0");
+  require(p.max_substeps >= 1, "max_substeps must be >= 1");
+  require(p.safety > 0.0 && p.safety <= 1.0, "safety must be in (0, 1]");
+  require(p.max_stretch > 0.0 && std::isfinite(p.max_stretch), "max_stretch must be > 0");
+  require(p.cg_tolerance > 0.0 && p.cg_tolerance < 1.0, "cg_tolerance must be in (0, 1)");
+  require(p.cg_max_iterations >= 1, "cg_max_iterations must be >= 1");
+  nonneg(p.cg_velocity_tolerance, "cg_velocity_tolerance");
+}
+
+LatticeDynamics::LatticeDynamics(FfdLattice& lattice, const DynamicsParams& p)
+    : lat_(lattice), p_(p), M_(lattice.M()), n_(lattice.size()) {
+  validate(p);
+  build_springs();
+  vel_ = RowMatX3::Zero(n_, 3);
+  accel_ = RowMatX3::Zero(n_, 3);
+  drift_ = RowMatX3::Zero(n_, 3);
+  disp_ = RowMatX3::Zero(n_, 3);
+  x_save_ = RowMatX3::Zero(n_, 3);
+  v_save_ = RowMatX3::Zero(n_, 3);
+  mass_ = Eigen::VectorXd::Ones(n_);
+  area_ = heat_ = heat_prev_ = Eigen::VectorXd::Zero(n_);
+  D_prev_ = delta_ = Eigen::VectorXd::Zero(M_ * M_);
+  pinned_.assign(n_, 0);
+  awake_.assign(n_, 1);
+  forced_.assign(n_, 0);
+  mark_.assign(n_, 0);
+  list_.reserve(n_);
+  slot_.assign(n_, -1);
+  active_.reserve(n_);
+  contact_ = Eigen::VectorXd::Constant(n_, -1.0);
+}
+
+void LatticeDynamics::build_springs() {
+  auto add = [&](int a, int b, std::uint8_t kind) {
+    sa_.push_back(a);
+    sb_.push_back(b);
+    kind_.push_back(kind);
+    rest_len_.push_back((lat_.rest().row(b) - lat_.rest().row(a)).norm());
+  };
+  const int M = M_;
+  for (int k = 0; k < 2; ++k)
+    for (int i = 0; i < M; ++i)
+      for (int j = 0; j < M; ++j) {
+        const int v = lat_.index(i, j, k);
+        if (j + 1 < M) add(v, lat_.index(i, j + 1, k), 0);
+        if (i + 1 < M) add(v, lat_.index(i + 1, j, k), 0);
+        if (i + 1 < M && j + 1 < M) {
+          add(v, lat_.index(i + 1, j + 1, k), 1);
+          add(lat_.index(i, j + 1, k), lat_.index(i + 1, j, k), 1);
+        }
+        if (j + 2 < M) add(v, lat_.index(i, j + 2, k), 2);
+        if (i + 2 < M) add(v, lat_.index(i + 2, j, k), 2);
+      }
+  vert_spring_.assign(M * M, 0);
+  for (int i = 0; i < M; ++i)
+    for (int j = 0; j < M; ++j) {
+      vert_spring_[i * M + j] = static_cast<int>(sa_.size());
+      add(lat_.index(i, j, 0), lat_.index(i, j, 1), 3);
+      if (j + 1 < M) {
+        add(lat_.index(i, j, 0), lat_.index(i, j + 1, 1), 4);
+        add(lat_.index(i, j, 1), lat_.index(i, j + 1, 0), 4);
+      }
+      if (i + 1 < M) {
+        add(lat_.index(i, j, 0), lat_.index(i + 1, j, 1), 4);
+        add(lat_.index(i, j, 1), lat_.index(i + 1, j, 0), 4);
+      }
+    }
+  const int ns = static_cast<int>(sa_.size());
+  inc_start_.assign(n_ + 1, 0);
+  for (int s = 0; s < ns; ++s) {
+    ++inc_start_[sa_[s] + 1];
+    ++inc_start_[sb_[s] + 1];
+  }
+  for (int v = 0; v < n_; ++v) inc_start_[v + 1] += inc_start_[v];
+  inc_spring_.assign(2 * ns, 0);
+  inc_other_.assign(2 * ns, 0);
+  std::vector<int> fill(inc_start_.begin(), inc_start_.end() - 1);
+  for (int s = 0; s < ns; ++s) {
+    inc_spring_[fill[sa_[s]]] = s;
+    inc_other_[fill[sa_[s]]++] = sb_[s];
+    inc_spring_[fill[sb_[s]]] = s;
+    inc_other_[fill[sb_[s]]++] = sa_[s];
+  }
+  // Buffers of the solver: 6 per spring (Jacobian blocks), 27 per vertex (diagonal block and
+  // the two blocks of its row of the couple-block preconditioner),
+  // 3 per vertex for each of the CG vectors and the forces, and the dot-product partials.
+  work_.assign(6 * std::size_t(ns) + 27 * std::size_t(n_) + 7 * 3 * std::size_t(n_) +
+                   (3 * std::size_t(n_)) / kDotChunk + 2,
+               0.0);
+}
+
+double LatticeDynamics::spring_k(int s) const {
+  const double c[5] = {p_.k_structure, p_.k_shear, p_.k_flex, p_.k_thickness, p_.k_transverse};
+  return c[kind_[s]] * p_.stiffness_unit;
+}
+
+void LatticeDynamics::set_params(const DynamicsParams& p) {
+  validate(p);
+  const DynamicsParams& o = p_;
+  const bool moved =
+      o.k_structure != p.k_structure || o.k_shear != p.k_shear || o.k_flex != p.k_flex ||
+      o.k_thickness != p.k_thickness || o.k_transverse != p.k_transverse ||
+      o.stiffness_unit != p.stiffness_unit ||
+      o.c_damping != p.c_damping || o.gravity != p.gravity || o.buoyancy != p.buoyancy ||
+      o.wind_drag != p.wind_drag || o.has_floor != p.has_floor || o.floor_z != p.floor_z ||
+      o.friction != p.friction || o.integrator != p.integrator || o.sleeping != p.sleeping ||
+      o.sleep_speed != p.sleep_speed;
+  p_ = p;
+  if (moved) std::fill(awake_.begin(), awake_.end(), 1);
+}
+
+void LatticeDynamics::set_masses(const Eigen::VectorXd& m) {
+  require(m.size() == n_, "masses must have 2*M*M = " + std::to_string(n_) + " entries, got " +
+                              std::to_string(m.size()));
+  for (int v = 0; v < n_; ++v)
+    require(std::isfinite(m(v)) && m(v) > 0.0, "masses must be finite and > 0 (entry " +
+                                                    std::to_string(v) + ")");
+  for (int v = 0; v < n_; ++v)
+    if (m(v) != mass_(v)) awake_[v] = 1;
+  mass_ = m;
+}
+
+void LatticeDynamics::set_areas(const Eigen::VectorXd& a) {
+  require(a.size() == n_, "areas must have 2*M*M = " + std::to_string(n_) + " entries, got " +
+                              std::to_string(a.size()));
+  for (int v = 0; v < n_; ++v)
+    require(std::isfinite(a(v)) && a(v) >= 0.0, "areas must be finite and >= 0 (entry " +
+                                                     std::to_string(v) + ")");
+  for (int v = 0; v < n_; ++v)
+    if (a(v) != area_(v)) awake_[v] = 1;
+  area_ = a;
+}
+
+void LatticeDynamics::set_pinned(const std::vector<std::uint8_t>& pinned) {
+  require(int(pinned.size()) == n_, "pinned must have 2*M*M = " + std::to_string(n_) +
+                                        " entries, got " + std::to_string(pinned.size()));
+  for (int v = 0; v < n_; ++v) {
+    pinned_[v] = pinned[v] ? 1 : 0;
+    if (pinned_[v]) vel_.row(v).setZero();
+  }
+  std::fill(awake_.begin(), awake_.end(), 1);
+}
+
+void LatticeDynamics::set_wind(const Eigen::Vector3d& w) {
+  require(w.allFinite(), "wind must be finite");
+  if (w == wind_) return;
+  wind_ = w;
+  for (int v = 0; v < n_; ++v)
+    if (area_(v) > 0.0) awake_[v] = 1;
+}
+
+void LatticeDynamics::set_state(const RowMatX3& x, const RowMatX3& v) {
+  require(x.rows() == n_ && x.allFinite(), "positions must be finite, 2*M*M x 3");
+  require(v.rows() == n_ && v.allFinite(), "velocities must be finite, 2*M*M x 3");
+  lat_.positions() = x;
+  vel_ = v;
+  accel_.setZero();
+  for (int q = 0; q < n_; ++q)
+    if (pinned_[q]) vel_.row(q).setZero();
+  std::fill(awake_.begin(), awake_.end(), 1);
+}
+
+Eigen::Vector3d LatticeDynamics::couple_normal(int v, const RowMatX3& x) const {
+  const int c = v / 2;
+  const Eigen::Vector3d d = (x.row(2 * c + 1) - x.row(2 * c)).transpose();
+  const double l = d.norm();
+  return l > 1e-300 ? Eigen::Vector3d(d / l) : Eigen::Vector3d::UnitZ();
+}
+
+Eigen::Vector3d LatticeDynamics::vertex_force(int v, const RowMatX3& x, const RowMatX3& vel) const {
+  const double m = mass_(v);
+  Eigen::Vector3d f = m * p_.gravity - p_.c_damping * m * vel.row(v).transpose();
+  f.z() += m * p_.buoyancy * heat_(v);
+  for (int q = inc_start_[v]; q < inc_start_[v + 1]; ++q) {
+    const int s = inc_spring_[q];
+    const Eigen::Vector3d d = (x.row(inc_other_[q]) - x.row(v)).transpose();
+    const double l = d.norm();
+    if (l > 1e-300) f += spring_k(s) * (l - rest_len_[s]) / l * d;
+  }
+  if (p_.wind_drag > 0.0 && area_(v) > 0.0) {
+    const Eigen::Vector3d n = couple_normal(v, x);
+    f += p_.wind_drag * area_(v) * (wind_ - vel.row(v).transpose()).dot(n) * n;
+  }
+  return f;
+}
+
+std::vector<std::uint8_t> LatticeDynamics::awake() const {
+  std::vector<std::uint8_t> out(n_);
+  for (int v = 0; v < n_; ++v) out[v] = awake_[v] && !pinned_[v];
+  return out;
+}
+
+RowMatX3 LatticeDynamics::forces() const {
+  RowMatX3 f(n_, 3);
+  for (int v = 0; v < n_; ++v) f.row(v) = vertex_force(v, lat_.positions(), vel_).transpose();
+  return f;
+}
+
+double LatticeDynamics::energy() const {
+  const RowMatX3& x = lat_.positions();
+  double e = 0.0;
+  for (std::size_t s = 0; s < sa_.size(); ++s) {
+    const double dl = (x.row(sb_[s]) - x.row(sa_[s])).norm() - rest_len_[s];
+    e += 0.5 * spring_k(int(s)) * dl * dl;
+  }
+  return e;
+}
+
+Eigen::SparseMatrix<double> LatticeDynamics::stiffness_matrix() const {
+  const RowMatX3& x = lat_.positions();
+  std::vector<Eigen::Triplet<double>> t;
+  t.reserve(sa_.size() * 36);
+  for (std::size_t s = 0; s < sa_.size(); ++s) {
+    const int a = sa_[s], b = sb_[s];
+    const Eigen::Matrix3d J =
+        spring_block((x.row(b) - x.row(a)).transpose(), spring_k(int(s)), rest_len_[s], false);
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) {
+        t.emplace_back(3 * a + r, 3 * a + c, -J(r, c));
+        t.emplace_back(3 * b + r, 3 * b + c, -J(r, c));
+        t.emplace_back(3 * a + r, 3 * b + c, J(r, c));
+        t.emplace_back(3 * b + r, 3 * a + c, J(r, c));
+      }
+  }
+  Eigen::SparseMatrix<double> K(3 * n_, 3 * n_);
+  K.setFromTriplets(t.begin(), t.end());
+  return K;
+}
+
+Eigen::Matrix<int, Eigen::Dynamic, 2, Eigen::RowMajor> LatticeDynamics::spring_pairs() const {
+  Eigen::Matrix<int, Eigen::Dynamic, 2, Eigen::RowMajor> out(sa_.size(), 2);
+  for (std::size_t s = 0; s < sa_.size(); ++s) out.row(s) << sa_[s], sb_[s];
+  return out;
+}
+
+double LatticeDynamics::omega_bound(const std::vector<int>& verts) const {
+  const RowMatX3& x = lat_.positions();
+  double worst = 0.0;
+  for (int v : verts) {
+    if (pinned_[v]) continue;
+    double b = 0.0;
+    for (int q = inc_start_[v]; q < inc_start_[v + 1]; ++q) {
+      const int s = inc_spring_[q], o = inc_other_[q];
+      const double l = (x.row(o) - x.row(v)).norm();
+      const double g = l > 1e-300 ? std::abs(1.0 - rest_len_[s] / l) : 1.0;
+      const double norm = spring_k(s) * std::max(1.0, g);
+      b += norm * (1.0 / mass_(v) + 1.0 / std::sqrt(mass_(v) * mass_(o)));
+    }
+    worst = std::max(worst, b);
+  }
+  return std::sqrt(worst);
+}
+
+double LatticeDynamics::max_frequency() const {
+  std::vector<int> all(n_);
+  for (int v = 0; v < n_; ++v) all[v] = v;
+  return omega_bound(all);
+}
+
+double LatticeDynamics::max_damping_rate() const {
+  double c = p_.c_damping;
+  for (int v : active_) c = std::max(c, p_.c_damping + p_.wind_drag * area_(v) / mass_(v));
+  return c;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Work buffers: [jacobian blocks 6/spring | diagonal blocks 9/vertex | preconditioner 18/vertex |
+// f, b, dv, r, z, p, Ap: 3/vertex each | dot partials].
+namespace {
+struct Buffers {
+  double *jac, *diag, *pinv, *f, *b, *dv, *r, *z, *p, *Ap, *partial;
+};
+Buffers buffers(std::vector<double>& w, std::size_t ns, std::size_t n) {
+  Buffers B;
+  double* q = w.data();
+  B.jac = q;
+  q += 6 * ns;
+  B.diag = q;
+  q += 9 * n;
+  B.pinv = q;
+  q += 18 * n;
+  double** vecs[7] = {&B.f, &B.b, &B.dv, &B.r, &B.z, &B.p, &B.Ap};
+  for (double** v : vecs) {
+    *v = q;
+    q += 3 * n;
+  }
+  B.partial = q;
+  return B;
+}
+
+// Sum of a[i] * b[i] in fixed chunks summed in order: the same bits for any thread count.
+double det_dot(const double* a, const double* b, int len, double* partial) {
+  const int chunks = (len + kDotChunk - 1) / kDotChunk;
+#ifdef THINBURN_HAVE_OPENMP
+#pragma omp parallel for num_threads(thinburn::num_threads()) schedule(static) if (chunks > 1)
+#endif
+  for (int c = 0; c < chunks; ++c) {
+    double s = 0.0;
+    const int end = std::min(len, (c + 1) * kDotChunk);
+    for (int i = c * kDotChunk; i < end; ++i) s += a[i] * b[i];
+    partial[c] = s;
+  }
+  double t = 0.0;
+  for (int c = 0; c < chunks; ++c) t += partial[c];
+  return t;
+}
+
+void store_sym(double* out, const Eigen::Matrix3d& J) {
+  out[0] = J(0, 0), out[1] = J(1, 1), out[2] = J(2, 2);
+  out[3] = J(0, 1), out[4] = J(0, 2), out[5] = J(1, 2);
+}
+Eigen::Matrix3d load_sym(const double* s) {
+  Eigen::Matrix3d J;
+  J << s[0], s[3], s[4], s[3], s[1], s[5], s[4], s[5], s[2];
+  return J;
+}
+Eigen::Map<Eigen::Vector3d> vec3(double* base, int slot) {
+  return Eigen::Map<Eigen::Vector3d>(base + 3 * slot);
+}
+Eigen::Map<Eigen::Matrix3d> mat3(double* base, int slot) {
+  return Eigen::Map<Eigen::Matrix3d>(base + 9 * slot);
+}
+}  // namespace
+
+Eigen::Vector3d LatticeDynamics::supported(int v, Eigen::Vector3d f) const {
+  if (!p_.has_floor || lat_.positions()(v, 2) > p_.floor_z || f.z() >= 0.0) return f;
+  const double normal = -f.z();
+  f.z() = 0.0;
+  const double t = std::hypot(f.x(), f.y());
+  const double keep = t > p_.friction * normal ? (t - p_.friction * normal) / t : 0.0;
+  f.x() *= keep;
+  f.y() *= keep;
+  return f;
+}
+
+void LatticeDynamics::collect_active() {
+  active_.clear();
+  std::fill(slot_.begin(), slot_.end(), -1);
+  for (int v = 0; v < n_; ++v)
+    if (awake_[v] && !pinned_[v]) {
+      slot_[v] = static_cast<int>(active_.size());
+      active_.push_back(v);
+    }
+}
+
+void LatticeDynamics::wake_rings(std::vector<std::uint8_t>& flag, int rings) const {
+  // flag: 1 = seed; grows by spring neighbours `rings` times (2 marks the new ring).
+  for (int r = 0; r < rings; ++r) {
+    for (int v = 0; v < n_; ++v)
+      if (flag[v] == 1)
+        for (int q = inc_start_[v]; q < inc_start_[v + 1]; ++q)
+          if (!flag[inc_other_[q]]) flag[inc_other_[q]] = 2;
+    for (auto& f : flag)
+      if (f == 2) f = 1;
+  }
+}
+
+void LatticeDynamics::wake_around_forcing() {
+  // Forced vertices (a crumple, or a heat change that would reach sleep_speed within the step)
+  // wake with two rings of spring neighbours; moving ones with one ring.
+  std::vector<std::uint8_t>& seed = mark_;
+  for (int v = 0; v < n_; ++v) seed[v] = forced_[v];
+  wake_rings(seed, 1);
+  for (int v = 0; v < n_; ++v)
+    if (awake_[v] && vel_.row(v).norm() >= p_.sleep_speed) seed[v] = 1;
+  wake_rings(seed, 1);
+  for (int v = 0; v < n_; ++v) {
+    if (seed[v]) awake_[v] = 1;
+    seed[v] = 0;
+  }
+}
+
+void LatticeDynamics::apply_plasticity() {
+  const RowMatX3& x = lat_.positions();
+  const int ns = static_cast<int>(sa_.size());
+#ifdef THINBURN_HAVE_OPENMP
+#pragma omp parallel for num_threads(thinburn::num_threads()) schedule(static) if (ns > kParallelMin)
+#endif
+  for (int s = 0; s < ns; ++s) {
+    const int a = sa_[s], b = sb_[s];
+    if (disp_.row(a).squaredNorm() == 0.0 && disp_.row(b).squaredNorm() == 0.0) continue;
+    const double before = (x.row(b) - x.row(a)).norm();
+    const double after = (x.row(b) + disp_.row(b) - x.row(a) - disp_.row(a)).norm();
+    rest_len_[s] = std::max(0.0, rest_len_[s] + p_.plasticity * (after - before));
+  }
+}
+
+int LatticeDynamics::choose_substeps(double dt, double omega, double c_eff) const {
+  if (p_.substeps > 0) return p_.substeps;
+  if (p_.integrator != Integrator::Implicit) {
+    const double h = p_.safety * explicit_stability_limit(p_.integrator, omega, c_eff);
+    const double need = std::ceil(dt / h);
+    if (!(need <= p_.max_substeps))
+      throw std::runtime_error(
+          std::string(p_.integrator == Integrator::Explicit ? "Explicit" : "Symplectic") +
+          " integration of dt = " + std::to_string(dt) + " s needs " + std::to_string(need) +
+          " substeps (largest frequency " + std::to_string(omega) + " rad/s, stable substep " +
+          std::to_string(h) + " s), more than max_substeps = " + std::to_string(p_.max_substeps) +
+          "; use the Implicit integrator or raise max_substeps");
+    return std::max(1, static_cast<int>(need));
+  }
+  // Implicit: one Newton step per substep is accurate while no spring changes length by more
+  // than max_stretch of its rest length in a substep.
+  const RowMatX3& x = lat_.positions();
+  double ratio = 0.0;
+  for (int v : active_)
+    for (int q = inc_start_[v]; q < inc_start_[v + 1]; ++q) {
+      const int s = inc_spring_[q], o = inc_other_[q];
+      const double len = std::max(rest_len_[s], 1e-3 * (x.row(o) - x.row(v)).norm());
+      if (len <= 0.0) continue;
+      const double rel = (vel_.row(v) + drift_.row(v) - vel_.row(o) - drift_.row(o)).norm();
+      ratio = std::max(ratio, rel * dt / (p_.max_stretch * len));
+    }
+  const double need = std::ceil(ratio);
+  return static_cast<int>(std::clamp(need, 1.0, double(p_.max_substeps)));
+}
+
+void LatticeDynamics::explicit_substep(double h, bool paper) {
+  Buffers B = buffers(work_, sa_.size(), n_);
+  RowMatX3& x = lat_.positions();
+  const int na = static_cast<int>(active_.size());
+#ifdef THINBURN_HAVE_OPENMP
+#pragma omp parallel for num_threads(thinburn::num_threads()) schedule(static) if (na > kParallelMin)
+#endif
+  for (int a = 0; a < na; ++a) {
+    const int v = active_[a];
+    vec3(B.f, a) = vertex_force(v, x, vel_) / mass_(v);
+  }
+#ifdef THINBURN_HAVE_OPENMP
+#pragma omp parallel for num_threads(thinburn::num_threads()) schedule(static) if (na > kParallelMin)
+#endif
+  for (int a = 0; a < na; ++a) {
+    const int v = active_[a];
+    const Eigen::Vector3d acc = vec3(B.f, a);
+    vel_.row(v) += h * acc.transpose();
+    x.row(v) += h * (vel_.row(v) + drift_.row(v));
+    if (paper) x.row(v) += 0.5 * h * h * acc.transpose();
+  }
+}
+
+void LatticeDynamics::implicit_assemble(double h) {
+  Buffers B = buffers(work_, sa_.size(), n_);
+  const RowMatX3& x = lat_.positions();
+  const int na = static_cast<int>(active_.size());
+  const double h2 = h * h;
+  // Jacobian blocks (clamped to positive semidefinite) of springs touching active vertices;
+  // each spring is computed by its smallest-index active endpoint.
+#ifdef THINBURN_HAVE_OPENMP
+#pragma omp parallel for num_threads(thinburn::num_threads()) schedule(static) if (na > kParallelMin)
+#endif
+  for (int a = 0; a < na; ++a) {
+    const int v = active_[a];
+    for (int q = inc_start_[v]; q < inc_start_[v + 1]; ++q) {
+      const int s = inc_spring_[q], o = inc_other_[q];
+      if (slot_[o] >= 0 && o < v) continue;
+      const Eigen::Vector3d d = (x.row(o) - x.row(v)).transpose();
+      store_sym(B.jac + 6 * s, spring_block(d, spring_k(s), rest_len_[s], true));
+    }
+  }
+  // Floor contact: a vertex on the floor that would move into it keeps v_z = 0 in this substep
+  // (a filtered DOF of the conjugate gradients) and the crumple cannot push it down.
+  // Right-hand side h (f + h K w), w = v + drift, and the diagonal blocks of
+  // A = M (1 + h c) + h W + h^2 J.
+#ifdef THINBURN_HAVE_OPENMP
+#pragma omp parallel for num_threads(thinburn::num_threads()) schedule(static) if (na > kParallelMin)
+#endif
+  for (int a = 0; a < na; ++a) {
+    const int v = active_[a];
+    const Eigen::Vector3d f = vertex_force(v, x, vel_);
+    contact_(v) = -1.0;
+    if (p_.has_floor && x(v, 2) <= p_.floor_z) {
+      const double vz_free = vel_(v, 2) + h * f.z() / mass_(v);
+      if (vz_free <= 0.0) {
+        contact_(v) = -vz_free;
+        drift_(v, 2) = std::max(drift_(v, 2), 0.0);
+      }
+    }
+    const Eigen::Vector3d wv = (vel_.row(v) + drift_.row(v)).transpose();
+    Eigen::Vector3d Kw = Eigen::Vector3d::Zero();
+    Eigen::Matrix3d D = mass_(v) * (1.0 + h * p_.c_damping) * Eigen::Matrix3d::Identity();
+    if (p_.wind_drag > 0.0 && area_(v) > 0.0) {
+      const Eigen::Vector3d n = couple_normal(v, x);
+      D += h * p_.wind_drag * area_(v) * n * n.transpose();
+    }
+    for (int q = inc_start_[v]; q < inc_start_[v + 1]; ++q) {
+      const int o = inc_other_[q];
+      const Eigen::Matrix3d J = load_sym(B.jac + 6 * inc_spring_[q]);
+      Kw -= J * (wv - (vel_.row(o) + drift_.row(o)).transpose());
+      D += h2 * J;
+    }
+    vec3(B.b, a) = h * (f + h * Kw);
+    mat3(B.diag, a) = D;
+  }
+  // Couple-block Jacobi: the top-bottom spring is the stiffest, so both vertices of a couple are
+  // inverted together (6 x 6); a vertex whose partner is not active gets its 3 x 3 inverse.
+#ifdef THINBURN_HAVE_OPENMP
+#pragma omp parallel for num_threads(thinburn::num_threads()) schedule(static) if (na > kParallelMin)
+#endif
+  for (int a = 0; a < na; ++a) {
+    const int v = active_[a], pa = slot_[v ^ 1];
+    if (pa < 0) {
+      mat3(B.pinv, 2 * a) = mat3(B.diag, a).inverse();
+      mat3(B.pinv, 2 * a + 1).setZero();
+      continue;
+    }
+    Eigen::Matrix<double, 6, 6> C;
+    const Eigen::Matrix3d J = load_sym(B.jac + 6 * vert_spring_[v / 2]);
+    C.topLeftCorner<3, 3>() = mat3(B.diag, a);
+    C.bottomRightCorner<3, 3>() = mat3(B.diag, pa);
+    C.topRightCorner<3, 3>() = -h2 * J;
+    C.bottomLeftCorner<3, 3>() = -h2 * J;
+    const Eigen::Matrix<double, 6, 6> Ci = C.inverse();
+    mat3(B.pinv, 2 * a) = Ci.topLeftCorner<3, 3>();
+    mat3(B.pinv, 2 * a + 1) = Ci.topRightCorner<3, 3>();
+  }
+}
+
+void LatticeDynamics::apply_A(double h, const double* in, double* out) {
+  Buffers B = buffers(work_, sa_.size(), n_);
+  const int na = static_cast<int>(active_.size());
+  const double h2 = h * h;
+#ifdef THINBURN_HAVE_OPENMP
+#pragma omp parallel for num_threads(thinburn::num_threads()) schedule(static) if (na > kParallelMin)
+#endif
+  for (int a = 0; a < na; ++a) {
+    const int v = active_[a];
+    Eigen::Vector3d y = mat3(B.diag, a) * Eigen::Map<const Eigen::Vector3d>(in + 3 * a);
+    for (int q = inc_start_[v]; q < inc_start_[v + 1]; ++q) {
+      const int so = slot_[inc_other_[q]];
+      if (so >= 0)
+        y -= h2 * load_sym(B.jac + 6 * inc_spring_[q]) * Eigen::Map<const Eigen::Vector3d>(in + 3 * so);
+    }
+    vec3(out, a) = y;
+  }
+}
+
+void LatticeDynamics::precondition(const double* in, double* out) {
+  Buffers B = buffers(work_, sa_.size(), n_);
+  const int na = static_cast<int>(active_.size());
+#ifdef THINBURN_HAVE_OPENMP
+#pragma omp parallel for num_threads(thinburn::num_threads()) schedule(static) if (na > kParallelMin)
+#endif
+  for (int a = 0; a < na; ++a) {
+    const int v = active_[a], pa = slot_[v ^ 1];
+    Eigen::Vector3d y = mat3(B.pinv, 2 * a) * Eigen::Map<const Eigen::Vector3d>(in + 3 * a);
+    if (pa >= 0) y += mat3(B.pinv, 2 * a + 1) * Eigen::Map<const Eigen::Vector3d>(in + 3 * pa);
+    if (contact_(v) >= 0.0) y.z() = 0.0;  // the filter of Baraff and Witkin's modified PCG
+    vec3(out, a) = y;
+  }
+}
+
+int LatticeDynamics::implicit_substep(double h) {
+  implicit_assemble(h);
+  Buffers B = buffers(work_, sa_.size(), n_);
+  RowMatX3& x = lat_.positions();
+  const int na = static_cast<int>(active_.size());
+  const int N = 3 * na;
+  auto axpy = [&](double alpha, const double* xv, double* y) {  // y += alpha x
+#ifdef THINBURN_HAVE_OPENMP
+#pragma omp parallel for num_threads(thinburn::num_threads()) schedule(static) if (N > 3 * kParallelMin)
+#endif
+    for (int i = 0; i < N; ++i) y[i] += alpha * xv[i];
+  };
+  // Modified PCG (Baraff and Witkin 1998): constrained DOFs start at their prescribed value
+  // (v_z -> 0) and every search direction is filtered to leave them there.
+  // Warm start from the previous substep's acceleration (a smooth motion changes it little);
+  // constrained DOFs start at their prescribed value.
+  for (int a = 0; a < na; ++a) {
+    const int v = active_[a];
+    Eigen::Vector3d d0 = h * accel_.row(v).transpose();
+    if (contact_(v) >= 0.0) d0.z() = -vel_(v, 2);
+    vec3(B.dv, a) = d0;
+  }
+  apply_A(h, B.dv, B.Ap);
+  for (int i = 0; i < N; ++i) B.r[i] = B.b[i] - B.Ap[i];
+  for (int a = 0; a < na; ++a)
+    if (contact_(active_[a]) >= 0.0) B.r[3 * a + 2] = B.b[3 * a + 2] = 0.0;
+  int iterations = 0;
+  const double rnorm0 = std::sqrt(det_dot(B.r, B.r, N, B.partial));
+  const double ref = std::max(rnorm0, std::sqrt(det_dot(B.b, B.b, N, B.partial)));
+  // Absolute floor: a residual below cg_velocity_tolerance times the mass norm changes the
+  // velocities by less than about that (A >= M), whatever rounding-level right-hand side a
+  // resting sheet has; without it such a sheet would iterate on rounding noise.
+  double mass2 = 0.0;
+  for (int v : active_) mass2 += 3.0 * mass_(v) * mass_(v);
+  const double floor_abs = p_.cg_velocity_tolerance * std::sqrt(mass2);
+  if (rnorm0 > floor_abs) {
+    precondition(B.r, B.p);
+    double rz = det_dot(B.r, B.p, N, B.partial);
+    while (iterations < p_.cg_max_iterations) {
+      ++iterations;
+      apply_A(h, B.p, B.Ap);
+      for (int a = 0; a < na; ++a)
+        if (contact_(active_[a]) >= 0.0) B.Ap[3 * a + 2] = 0.0;
+      const double pAp = det_dot(B.p, B.Ap, N, B.partial);
+      if (!(pAp > 0.0)) break;
+      const double alpha = rz / pAp;
+      axpy(alpha, B.p, B.dv);
+      axpy(-alpha, B.Ap, B.r);
+      const double rn = std::sqrt(det_dot(B.r, B.r, N, B.partial));
+      if (rn <= p_.cg_tolerance * ref || rn <= floor_abs) break;
+      precondition(B.r, B.z);
+      const double rz_new = det_dot(B.r, B.z, N, B.partial);
+      const double beta = rz_new / rz;
+      rz = rz_new;
+#ifdef THINBURN_HAVE_OPENMP
+#pragma omp parallel for num_threads(thinburn::num_threads()) schedule(static) if (N > 3 * kParallelMin)
+#endif
+      for (int i = 0; i < N; ++i) B.p[i] = B.z[i] + beta * B.p[i];
+    }
+  }
+#ifdef THINBURN_HAVE_OPENMP
+#pragma omp parallel for num_threads(thinburn::num_threads()) schedule(static) if (na > kParallelMin)
+#endif
+  for (int a = 0; a < na; ++a) {
+    const int v = active_[a];
+    vel_.row(v) += vec3(B.dv, a).transpose();
+    accel_.row(v) = vec3(B.dv, a).transpose() / h;
+    x.row(v) += h * (vel_.row(v) + drift_.row(v));
+  }
+  return iterations;
+}
+
+void LatticeDynamics::apply_floor(double h) {
+  if (!p_.has_floor) return;
+  RowMatX3& x = lat_.positions();
+  const bool implicit = p_.integrator == Integrator::Implicit;
+  for (int v : active_) {
+    // Coulomb friction: the tangential speed drops by friction times the normal speed the
+    // floor removed (from the contact filter, or from the projection below).
+    double removed = -1.0;
+    if (implicit && contact_(v) >= 0.0) removed = contact_(v);
+    if (x(v, 2) < p_.floor_z) {
+      removed = std::max(0.0, -vel_(v, 2));
+      x(v, 2) = p_.floor_z;
+      vel_(v, 2) = std::max(0.0, vel_(v, 2));
+    }
+    if (removed < 0.0) continue;
+    const double t = std::hypot(vel_(v, 0), vel_(v, 1));
+    const double keep = t > p_.friction * removed ? (t - p_.friction * removed) / t : 0.0;
+    vel_(v, 0) *= keep;
+    vel_(v, 1) *= keep;
+  }
+}
+
+bool LatticeDynamics::wake_stressed_sleepers(double dt) {
+  list_.clear();
+  for (int v : active_)
+    for (int q = inc_start_[v]; q < inc_start_[v + 1]; ++q) {
+      const int o = inc_other_[q];
+      if (!awake_[o] && !pinned_[o] && !mark_[o]) {
+        mark_[o] = 1;
+        list_.push_back(o);
+      }
+    }
+  bool woke = false;
+  for (int o : list_) {
+    mark_[o] = 0;
+    const Eigen::Vector3d f = supported(o, vertex_force(o, lat_.positions(), vel_));
+    if (f.norm() / mass_(o) * dt >= p_.sleep_speed) {
+      awake_[o] = 1;
+      woke = true;
+    }
+  }
+  return woke;
+}
+
+void LatticeDynamics::update_sleep(double dt) {
+  const RowMatX3& x = lat_.positions();
+  const int na = static_cast<int>(active_.size());
+  // A vertex sleeps when it, and every spring neighbour, is slower than sleep_speed, it was not
+  // forced this step, and its net force (floor reaction included) would not bring it to
+  // sleep_speed within a step.
+#ifdef THINBURN_HAVE_OPENMP
+#pragma omp parallel for num_threads(thinburn::num_threads()) schedule(static) if (na > kParallelMin)
+#endif
+  for (int a = 0; a < na; ++a) {
+    const int v = active_[a];
+    bool quiet = !forced_[v] && vel_.row(v).norm() < p_.sleep_speed;
+    for (int q = inc_start_[v]; quiet && q < inc_start_[v + 1]; ++q)
+      quiet = vel_.row(inc_other_[q]).norm() < p_.sleep_speed;
+    if (quiet) quiet = supported(v, vertex_force(v, x, vel_)).norm() / mass_(v) * dt < p_.sleep_speed;
+    mark_[v] = quiet ? 1 : 0;
+  }
+  for (int v : active_) {
+    if (mark_[v]) {
+      awake_[v] = 0;
+      vel_.row(v).setZero();
+      accel_.row(v).setZero();
+    }
+    mark_[v] = 0;
+  }
+}
+
+StepStats LatticeDynamics::step(double dt, const Eigen::VectorXd& D, const Eigen::VectorXd& heat) {
+  require(std::isfinite(dt) && dt > 0.0, "dt must be finite and > 0, got " + std::to_string(dt));
+  require(D.size() == M_ * M_, "D must have M*M = " + std::to_string(M_ * M_) + " entries, got " +
+                                   std::to_string(D.size()));
+  require(heat.size() == n_, "heat must have 2*M*M = " + std::to_string(n_) + " entries, got " +
+                                 std::to_string(heat.size()));
+  require(D.allFinite(), "D must be finite");
+  require(heat.allFinite(), "heat must be finite");
+  StepStats st;
+  heat_save_ = heat_;
+  heat_ = heat;
+  delta_ = p_.crumple_gain * (D - D_prev_);
+  const bool crumple = delta_.size() > 0 && delta_.cwiseAbs().maxCoeff() > 0.0;
+  if (crumple)
+    crumple_displacements(M_, lat_.positions(), delta_, pinned_, disp_);
+  else
+    disp_.setZero();
+  for (int v = 0; v < n_; ++v)
+    forced_[v] = disp_.row(v).squaredNorm() > 0.0 ||
+                 std::abs(p_.buoyancy * (heat_(v) - heat_prev_(v))) * dt >= p_.sleep_speed;
+  if (!p_.sleeping)
+    std::fill(awake_.begin(), awake_.end(), 1);
+  else
+    wake_around_forcing();
+  drift_ = disp_ / dt;
+  const bool plastic = crumple && p_.plasticity > 0.0;
+  if (plastic) rest_save_ = rest_len_;
+  bool plastic_done = false;
+  try {
+    for (int pass = 1;; ++pass) {
+      collect_active();
+      st.passes = pass;
+      st.awake = static_cast<int>(active_.size());
+      st.omega_max = omega_bound(active_);
+      st.substeps = active_.empty() ? 0 : choose_substeps(dt, st.omega_max, max_damping_rate());
+      if (!plastic_done && plastic) apply_plasticity();
+      plastic_done = true;
+      for (int a = 0; a < st.awake; ++a) {
+        x_save_.row(a) = lat_.positions().row(active_[a]);
+        v_save_.row(a) = vel_.row(active_[a]);
+      }
+      const double h = st.substeps > 0 ? dt / st.substeps : 0.0;
+      for (int k = 0; k < st.substeps; ++k) {
+        if (p_.integrator == Integrator::Implicit)
+          st.cg_iterations += implicit_substep(h);
+        else
+          explicit_substep(h, p_.integrator == Integrator::Explicit);
+        apply_floor(h);
+      }
+      if (!p_.sleeping || pass >= kMaxPasses || !wake_stressed_sleepers(dt)) break;
+      for (int a = 0; a < st.awake; ++a) {
+        lat_.positions().row(active_[a]) = x_save_.row(a);
+        vel_.row(active_[a]) = v_save_.row(a);
+      }
+    }
+  } catch (...) {
+    heat_ = heat_save_;
+    if (plastic) rest_len_ = rest_save_;
+    throw;
+  }
+  D_prev_ = D;
+  if (p_.sleeping) update_sleep(dt);
+  for (int v = 0; v < n_; ++v)
+    if (awake_[v]) heat_prev_(v) = heat_(v);
+  return st;
+}
+
+}  // namespace thinburn

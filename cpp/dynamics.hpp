@@ -1,0 +1,169 @@
+#pragma once
+/// @brief Motion of the FFD lattice (Liu et al. 2009 §4.3, eqs 7-15): springs, crumple,
+/// damping, gravity, buoyancy, wind and a floor, integrated explicitly (the paper's scheme),
+/// with symplectic Euler or with Baraff-Witkin backward Euler, on the awake vertices only.
+///
+/// Units: SI (m, kg, s), z up. See docs/dynamics.md for every reading and choice.
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+
+#include <cstdint>
+#include <vector>
+
+#include "lattice.hpp"
+
+namespace thinburn {
+
+/// @brief Time integrator of the lattice.
+enum class Integrator {
+  Explicit,    ///< the paper's eqs 13-15: V = V0 + a dt, Pos = Pos0 + V dt + a dt^2 / 2
+  Symplectic,  ///< symplectic Euler: V = V0 + a dt, Pos = Pos0 + V dt
+  Implicit     ///< backward Euler, one Newton step per substep, conjugate gradients
+};
+
+/// @brief Parameters of the lattice's motion; may change between steps.
+struct DynamicsParams {
+  double k_structure = 0.05;   ///< Table 1 coefficient of the axis-neighbour springs (per layer)
+  double k_shear = 0.05;       ///< Table 1 coefficient of the diagonal springs (per layer)
+  double k_flex = 0.05;        ///< Table 1 coefficient of the two-apart springs (per layer)
+  double k_thickness = 1.0;    ///< coefficient of the top-bottom spring of each couple
+  double k_transverse = 0.05;  ///< coefficient of the diagonals between adjacent couples' top and bottom
+  double stiffness_unit = 1000.0;  ///< N/m per unit coefficient: spring k = coefficient * unit
+  double c_damping = 1.7;      ///< 1/s, eq 12 per kilogram: F = -c_damping * m * v
+  Eigen::Vector3d gravity{0.0, 0.0, -9.81};  ///< m/s^2
+  double buoyancy = 1.0;       ///< N/kg per unit heat: F = m * buoyancy * heat * (0, 0, 1)
+  double wind_drag = 1.0;      ///< Pa s/m: F = wind_drag * area * ((wind - v) . n) n
+  bool has_floor = false;      ///< nothing goes below floor_z when set
+  double floor_z = 0.0;        ///< m
+  double friction = 0.5;       ///< Coulomb coefficient on the floor (>= 0)
+  Integrator integrator = Integrator::Implicit;
+  double crumple_gain = 1.0;   ///< multiplies the increase of D turned into a crumple
+  double plasticity = 1.0;     ///< in [0, 1]: share of each crumple that the springs' rest lengths keep
+  double sleep_speed = 1e-4;   ///< m/s: slower vertices, unforced, may sleep
+  bool sleeping = true;        ///< false: every free vertex integrates every step
+  int substeps = 0;            ///< 0: chosen per step from stability (explicit) or motion (implicit)
+  int max_substeps = 10000;    ///< explicit steps needing more throw std::runtime_error
+  double safety = 0.9;         ///< explicit substep h = safety * (theoretical stability limit)
+  double max_stretch = 0.25;   ///< implicit: largest relative change of a spring per substep
+  double cg_tolerance = 1e-8;  ///< relative residual of the conjugate gradients
+  double cg_velocity_tolerance = 1e-7;  ///< m/s: absolute floor of the CG stopping test
+  int cg_max_iterations = 2000;
+};
+
+/// @brief Throw std::invalid_argument naming the first invalid field.
+void validate(const DynamicsParams& p);
+
+/// @brief Largest substep h for which an explicit integrator (Explicit or Symplectic) is
+/// stable on every mode x'' = -w^2 x - c x' with w <= omega: spectral radius of the substep's
+/// amplification matrix <= 1 (bisection). Undamped: Symplectic 2 / omega, Explicit sqrt(2) / omega.
+double explicit_stability_limit(Integrator integrator, double omega, double c);
+
+/// @brief What one step did.
+struct StepStats {
+  int substeps = 0;       ///< substeps taken
+  int awake = 0;          ///< vertices integrated
+  int cg_iterations = 0;  ///< conjugate-gradient iterations, all substeps and passes
+  double omega_max = 0;   ///< rad/s, bound on the largest frequency of the awake lattice
+  int passes = 0;         ///< integrations of the step (> 1 when it woke sleepers and redid it)
+};
+
+/// @brief Springs, forces and integration of an FfdLattice's control vertices.
+class LatticeDynamics {
+ public:
+  /// @brief Dynamics of lattice (kept by reference; it must outlive this object). Masses start
+  /// at 1 kg, areas at 0, nothing pinned, no wind.
+  LatticeDynamics(FfdLattice& lattice, const DynamicsParams& p);
+
+  /// @brief Replace the parameters; everything wakes if a parameter that moves vertices changed.
+  void set_params(const DynamicsParams& p);
+  /// @brief The parameters in force.
+  const DynamicsParams& params() const { return p_; }
+  /// @brief kg per control vertex (> 0); vertices whose mass changed wake, velocities are kept.
+  void set_masses(const Eigen::VectorXd& m);
+  /// @brief m^2 of sheet mapped to each control vertex (>= 0), for the wind pressure.
+  void set_areas(const Eigen::VectorXd& a);
+  /// @brief Per control vertex; pinned ones never move.
+  void set_pinned(const std::vector<std::uint8_t>& pinned);
+  /// @brief Wind velocity, m/s.
+  void set_wind(const Eigen::Vector3d& w);
+  /// @brief Set positions and velocities ((2 M^2) x 3 each); everything wakes.
+  void set_state(const RowMatX3& x, const RowMatX3& v);
+
+  /// @brief Advance by dt. D: per couple (M^2) total rotation so far (rad, eqs 4-6); the step
+  /// turns its increase since the previous step into a crumple. heat: per control vertex (2 M^2),
+  /// drives buoyancy. Throws std::runtime_error if an explicit integrator needs more than
+  /// max_substeps substeps.
+  StepStats step(double dt, const Eigen::VectorXd& D, const Eigen::VectorXd& heat);
+
+  /// @brief Velocities ((2 M^2) x 3), m/s.
+  const RowMatX3& velocities() const { return vel_; }
+  /// @brief 1 where a vertex is awake (integrated by the next step), 0 where it sleeps or is
+  /// pinned.
+  std::vector<std::uint8_t> awake() const;
+  /// @brief Total force per vertex at the current state (springs, gravity, damping, buoyancy
+  /// from the last step's heat, wind); the crumple is a prescribed motion, not in it.
+  RowMatX3 forces() const;
+  /// @brief Exact Jacobian of the spring forces w.r.t. positions, (6 M^2) x (6 M^2).
+  Eigen::SparseMatrix<double> stiffness_matrix() const;
+  /// @brief Elastic energy of the springs, J.
+  double energy() const;
+  /// @brief Upper bound (block Gershgorin) on the largest frequency of M^-1 K over free
+  /// vertices at the current state, rad/s.
+  double max_frequency() const;
+  /// @brief Rest lengths of the springs (changed by plasticity), m.
+  const std::vector<double>& rest_lengths() const { return rest_len_; }
+  /// @brief Spring endpoints, (springs) x 2.
+  Eigen::Matrix<int, Eigen::Dynamic, 2, Eigen::RowMajor> spring_pairs() const;
+  /// @brief Spring kind per spring: 0 structure, 1 shear, 2 flex, 3 thickness (top-bottom of a
+  /// couple), 4 transverse (top-bottom diagonals between adjacent couples).
+  const std::vector<std::uint8_t>& spring_kinds() const { return kind_; }
+
+ private:
+  struct Scratch;
+  void build_springs();
+  double spring_k(int s) const;
+  void wake_rings(std::vector<std::uint8_t>& flag, int rings) const;
+  void collect_active();
+  double omega_bound(const std::vector<int>& verts) const;
+  Eigen::Vector3d vertex_force(int v, const RowMatX3& x, const RowMatX3& vel) const;
+  Eigen::Vector3d couple_normal(int v, const RowMatX3& x) const;
+  int choose_substeps(double dt, double omega, double c_eff) const;
+  double max_damping_rate() const;
+  void explicit_substep(double h, bool paper);
+  int implicit_substep(double h);
+  void implicit_assemble(double h);
+  void apply_A(double h, const double* in, double* out);
+  void precondition(const double* in, double* out);
+  void apply_floor(double h);
+  void apply_plasticity();
+  bool wake_stressed_sleepers(double dt);
+  void update_sleep(double dt);
+  Eigen::Vector3d supported(int v, Eigen::Vector3d f) const;
+  void wake_around_forcing();
+
+  FfdLattice& lat_;
+  DynamicsParams p_;
+  int M_, n_;
+  // Springs: endpoints, kind, rest length; per-vertex incidence (CSR, fixed order).
+  std::vector<int> sa_, sb_;
+  std::vector<std::uint8_t> kind_;
+  std::vector<double> rest_len_;
+  std::vector<int> inc_start_, inc_spring_, inc_other_;
+  std::vector<int> vert_spring_;    // per couple: its top-bottom spring
+  Eigen::VectorXd contact_;         // per vertex: floor impulse per mass of this substep, -1 if free
+  RowMatX3 vel_, drift_, disp_;
+  RowMatX3 accel_;                  // last implicit acceleration per vertex: the CG warm start
+  Eigen::VectorXd mass_, area_, heat_, heat_prev_, D_prev_, delta_;
+  Eigen::Vector3d wind_{0, 0, 0};
+  std::vector<std::uint8_t> pinned_, awake_, forced_;
+  std::vector<int> active_, slot_;  // active vertices; slot_[v] = position in active_ or -1
+  bool first_step_ = true;
+  std::vector<std::uint8_t> mark_;  // scratch flags, all zero between uses
+  std::vector<int> list_;           // scratch vertex list
+  std::vector<double> work_;        // CG and Jacobian buffers, reused
+  RowMatX3 x_save_, v_save_;        // active vertices' state at the start of a pass
+  Eigen::VectorXd heat_save_;        // restored, with rest_save_, when a step throws
+  std::vector<double> rest_save_;
+};
+
+}  // namespace thinburn

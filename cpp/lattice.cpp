@@ -1,0 +1,150 @@
+#include "lattice.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "threads.hpp"
+
+namespace thinburn {
+namespace {
+
+constexpr double kParamSlack = 1e-9;
+
+// Weights of one lattice axis at coordinate x over the three nodes base, base+1, base+2
+// (base + 2 may be unused: weight 0). Linear: two nodes.
+struct Axis1D {
+  int base = 0;
+  double w[3] = {0, 0, 0};
+};
+
+Axis1D linear_axis(double x, int M) {
+  Axis1D a;
+  a.base = std::min(static_cast<int>(std::floor(x)), M - 2);
+  const double f = x - a.base;
+  a.w[0] = 1.0 - f;
+  a.w[1] = f;
+  return a;
+}
+
+// Uniform quadratic B-spline centred on the nodes; the nodes beyond the ends are linear
+// extrapolations (ghost = 2 x_end - x_next), which keeps partition of unity and linear
+// precision and leaves every weight >= 0 (near an end the spline is the linear one).
+Axis1D bspline_axis(double x, int M) {
+  if (M < 3) return linear_axis(x, M);
+  const int c = std::clamp(static_cast<int>(std::lround(x)), 0, M - 1);
+  const double d = x - c;
+  double node_w[3] = {0.5 * (0.5 - d) * (0.5 - d), 0.75 - d * d, 0.5 * (0.5 + d) * (0.5 + d)};
+  Axis1D a;
+  a.base = std::clamp(c - 1, 0, M - 3);
+  for (int q = 0; q < 3; ++q) {
+    const int node = c - 1 + q;
+    if (node < 0) {  // ghost -1 = 2 x_0 - x_1
+      a.w[0 - a.base] += 2.0 * node_w[q];
+      a.w[1 - a.base] -= node_w[q];
+    } else if (node > M - 1) {  // ghost M = 2 x_{M-1} - x_{M-2}
+      a.w[M - 1 - a.base] += 2.0 * node_w[q];
+      a.w[M - 2 - a.base] -= node_w[q];
+    } else {
+      a.w[node - a.base] += node_w[q];
+    }
+  }
+  return a;
+}
+
+double checked_param(double x, double hi, const char* what, Eigen::Index row) {
+  if (!std::isfinite(x) || x < -kParamSlack || x > hi + kParamSlack)
+    throw std::invalid_argument("params: " + std::string(what) + " of row " + std::to_string(row) +
+                                " is " + std::to_string(x) + ", outside [0, " +
+                                std::to_string(hi) + "]");
+  return std::clamp(x, 0.0, hi);
+}
+
+}  // namespace
+
+FfdLattice::FfdLattice(int M, const RowMatX3& rest) : M_(M), rest_(rest), pos_(rest) {
+  if (M < 2) throw std::invalid_argument("M must be >= 2, got " + std::to_string(M));
+  if (rest.rows() != 2 * Eigen::Index(M) * M)
+    throw std::invalid_argument("rest must have 2*M*M = " + std::to_string(2 * M * M) +
+                                " rows, got " + std::to_string(rest.rows()));
+  if (!rest.allFinite()) throw std::invalid_argument("rest must be finite");
+}
+
+Embedding FfdLattice::embed(const RowMatX3& params, const RowMatX3& rest_points,
+                            LatticeInterp interp) const {
+  if (params.rows() != rest_points.rows())
+    throw std::invalid_argument("rest_points must have as many rows as params (" +
+                                std::to_string(params.rows()) + "), got " +
+                                std::to_string(rest_points.rows()));
+  if (!rest_points.allFinite()) throw std::invalid_argument("rest_points must be finite");
+  const bool spline = interp == LatticeInterp::QuadraticBSpline && M_ >= 3;
+  const int side = spline ? 3 : 2;
+  Embedding e;
+  e.stencil = side * side;
+  const Eigen::Index n = params.rows();
+  e.couple.assign(std::size_t(n) * e.stencil, 0);
+  e.weight.assign(std::size_t(n) * e.stencil, 0.0);
+  e.r.resize(n);
+  e.rest = rest_points;
+  const double hi = M_ - 1;
+  for (Eigen::Index p = 0; p < n; ++p) {
+    const double s = checked_param(params(p, 0), hi, "s", p);
+    const double t = checked_param(params(p, 1), hi, "t", p);
+    e.r(p) = checked_param(params(p, 2), 1.0, "r", p);
+    const Axis1D ai = spline ? bspline_axis(s, M_) : linear_axis(s, M_);
+    const Axis1D aj = spline ? bspline_axis(t, M_) : linear_axis(t, M_);
+    for (int a = 0; a < side; ++a)
+      for (int b = 0; b < side; ++b) {
+        const std::size_t slot = std::size_t(p) * e.stencil + a * side + b;
+        const int couple = (ai.base + a) * M_ + (aj.base + b);
+        e.couple[slot] = couple;
+        e.weight[slot] = ai.w[a] * aj.w[b];
+      }
+  }
+  return e;
+}
+
+void FfdLattice::deform(const Embedding& e, Eigen::Ref<RowMatX3> out) const {
+  const Eigen::Index n = e.size();
+  if (out.rows() != n)
+    throw std::invalid_argument("out must have " + std::to_string(n) + " rows, got " +
+                                std::to_string(out.rows()));
+  for (std::int32_t c : e.couple)
+    if (c < 0 || c >= M_ * M_) throw std::invalid_argument("embedding does not fit this lattice");
+  const int st = e.stencil;
+#ifdef THINBURN_HAVE_OPENMP
+#pragma omp parallel for num_threads(thinburn::num_threads()) schedule(static)
+#endif
+  for (Eigen::Index p = 0; p < n; ++p) {
+    const double r = e.r(p);
+    // Displacements, not positions, are interpolated: at rest every term is exactly zero.
+    Eigen::RowVector3d disp = Eigen::RowVector3d::Zero();
+    for (int q = 0; q < st; ++q) {
+      const std::size_t slot = std::size_t(p) * st + q;
+      const int c = e.couple[slot];
+      disp += e.weight[slot] * ((1.0 - r) * (pos_.row(2 * c) - rest_.row(2 * c)) +
+                                r * (pos_.row(2 * c + 1) - rest_.row(2 * c + 1)));
+    }
+    out.row(p) = e.rest.row(p) + disp;
+  }
+}
+
+Eigen::VectorXd FfdLattice::scatter(const Embedding& e, const Eigen::VectorXd& values) const {
+  if (values.size() != e.size())
+    throw std::invalid_argument("values must have " + std::to_string(e.size()) +
+                                " entries, got " + std::to_string(values.size()));
+  Eigen::VectorXd out = Eigen::VectorXd::Zero(size());
+  const int st = e.stencil;
+  for (Eigen::Index p = 0; p < e.size(); ++p)
+    for (int q = 0; q < st; ++q) {
+      const std::size_t slot = std::size_t(p) * st + q;
+      const int c = e.couple[slot];
+      if (c < 0 || c >= M_ * M_) throw std::invalid_argument("embedding does not fit this lattice");
+      out(2 * c) += e.weight[slot] * (1.0 - e.r(p)) * values(p);
+      out(2 * c + 1) += e.weight[slot] * e.r(p) * values(p);
+    }
+  return out;
+}
+
+}  // namespace thinburn

@@ -1,0 +1,73 @@
+#pragma once
+/// @brief The FFD lattice of Liu et al. 2009 §4.1: M x M couples of control vertices (a bottom
+/// and a top vertex in charge of the same area of the sheet) and the embedding of points in it.
+///
+/// Control vertex index: ((i * M) + j) * 2 + k, i = row (the sheet's v axis), j = column (u
+/// axis), k = 0 bottom, 1 top. A point's deformed position is its rest position plus the
+/// interpolated DISPLACEMENT (current - rest) of the control vertices, so the rest mesh is
+/// reproduced exactly at rest whatever shape the lattice was draped into.
+#include <Eigen/Core>
+
+#include <cstdint>
+#include <vector>
+
+namespace thinburn {
+
+using RowMatX3 = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
+
+/// @brief In-plane interpolation of the lattice (always linear through the thickness).
+enum class LatticeInterp {
+  Trilinear,        ///< bilinear in the sheet's plane: 2 x 2 couples per point
+  QuadraticBSpline  ///< uniform quadratic B-spline in the plane: 3 x 3 couples, C1 across cells
+};
+
+/// @brief Points embedded in a lattice: per point a stencil of couples with in-plane weights,
+/// the weight of the top layer and the rest position.
+struct Embedding {
+  int stencil = 4;                ///< couples per point: 4 (trilinear) or 9 (B-spline)
+  std::vector<std::int32_t> couple;  ///< n * stencil couple indices (i * M + j)
+  std::vector<double> weight;     ///< n * stencil in-plane weights, each point's sum to 1
+  Eigen::VectorXd r;              ///< n: weight of the top vertex of each couple (1 - r: bottom)
+  RowMatX3 rest;                  ///< n x 3: rest positions of the points
+  /// @brief Number of embedded points.
+  Eigen::Index size() const { return r.size(); }
+};
+
+/// @brief An M x M lattice of couples: rest and current positions of its 2 M^2 control vertices.
+class FfdLattice {
+ public:
+  /// @brief rest: (2 M^2) x 3 rest positions of the control vertices (M >= 2, finite).
+  FfdLattice(int M, const RowMatX3& rest);
+
+  /// @brief Embed points. params: n x 3 lattice coordinates (s in [0, M-1] along rows i, t in
+  /// [0, M-1] along columns j, r in [0, 1] bottom -> top); rest_points: their rest positions.
+  Embedding embed(const RowMatX3& params, const RowMatX3& rest_points,
+                  LatticeInterp interp = LatticeInterp::Trilinear) const;
+
+  /// @brief Deformed positions of embedded points (n x 3, preallocated) from the current
+  /// control positions: parallel over points, no allocation.
+  void deform(const Embedding& e, Eigen::Ref<RowMatX3> out) const;
+
+  /// @brief Spread per-point values onto the control vertices with the embedding's weights
+  /// (the transpose of the interpolation): sum over points of weight * value. Serial, fixed order.
+  Eigen::VectorXd scatter(const Embedding& e, const Eigen::VectorXd& values) const;
+
+  /// @brief Current control positions ((2 M^2) x 3), writable.
+  RowMatX3& positions() { return pos_; }
+  /// @brief Current control positions ((2 M^2) x 3).
+  const RowMatX3& positions() const { return pos_; }
+  /// @brief Rest control positions ((2 M^2) x 3).
+  const RowMatX3& rest() const { return rest_; }
+  /// @brief Couples per side.
+  int M() const { return M_; }
+  /// @brief Number of control vertices, 2 M^2.
+  int size() const { return 2 * M_ * M_; }
+  /// @brief Index of control vertex (i, j, k).
+  int index(int i, int j, int k) const { return ((i * M_) + j) * 2 + k; }
+
+ private:
+  int M_;
+  RowMatX3 rest_, pos_;
+};
+
+}  // namespace thinburn

@@ -1,0 +1,52 @@
+"""Motion of the FFD lattice (Liu et al. 2009 §4.3): presets and input checks around
+_core.LatticeDynamics. Keyword arguments of LatticeDynamics are the DynamicsParams fields; see
+docs/dynamics.md for their units and readings.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from . import _core
+
+LatticeDynamics = _core.LatticeDynamics
+Integrator = _core.Integrator
+StepStats = _core.StepStats
+explicit_stability_limit = _core.explicit_stability_limit
+crumple_displacements = _core.crumple_displacements
+
+__all__ = ["PRESETS", "Integrator", "LatticeDynamics", "StepStats", "crumple_displacements",
+           "explicit_stability_limit", "preset", "vertex_masses"]
+
+# Paper Table 1: spring coefficients (times stiffness_unit N/m) and C_damping (1/s, per kg).
+# The transverse diagonals (not in the paper) take the structure coefficient: they act as
+# structure springs between the layers.
+PRESETS = {
+    "paper": dict(k_structure=0.05, k_shear=0.05, k_flex=0.05, c_damping=1.7),
+    "cloth": dict(k_structure=0.3, k_shear=0.01, k_flex=0.04, c_damping=2.5),
+    "hard_paper": dict(k_structure=0.5, k_shear=0.01, k_flex=0.001, c_damping=1.7),
+    "silk": dict(k_structure=0.01, k_shear=0.01, k_flex=0.01, c_damping=2.5),
+    "curtain": dict(k_structure=0.3, k_shear=0.01, k_flex=0.04, c_damping=2.5),
+}
+for _p in PRESETS.values():
+    _p["k_transverse"] = _p["k_structure"]
+
+
+def preset(name: str, **overrides) -> dict:
+    """Keyword arguments for LatticeDynamics from a Table 1 preset, with overrides."""
+    if name not in PRESETS:
+        raise ValueError(f"name must be one of {sorted(PRESETS)}, got {name!r}")
+    return {**PRESETS[name], **overrides}
+
+
+def vertex_masses(M: int, area: float, areal_density: float) -> np.ndarray:
+    """Masses (kg) of the 2 M^2 control vertices of a sheet of the given area (m^2) and areal
+    density (kg/m^2), spread like the trilinear embedding of a uniform sheet: border couples
+    carry half, corners a quarter, split evenly between top and bottom."""
+    if isinstance(M, bool) or not isinstance(M, (int, np.integer)) or M < 2:
+        raise ValueError(f"M must be an int >= 2, got {M!r}")
+    if not (area > 0 and areal_density > 0):
+        raise ValueError(f"area and areal_density must be > 0, got {area}, {areal_density}")
+    w = np.ones(M)
+    w[[0, -1]] = 0.5
+    share = np.outer(w, w) / (M - 1) ** 2
+    return np.repeat((share * area * areal_density / 2.0).ravel(), 2)
