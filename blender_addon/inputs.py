@@ -7,6 +7,8 @@ from dataclasses import dataclass
 import bpy
 import numpy as np
 
+from .properties import DYNAMIC_PARAMS
+
 
 class BakeError(Exception):
     """A setting that stops the bake; its text is what the artist sees."""
@@ -19,6 +21,7 @@ class FrameSample:
     frame: int
     igniters: list
     wind: tuple
+    dynamics: dict  # the keyframeable motion parameters and the scene's gravity
 
 
 def sheet_geometry(obj):
@@ -107,8 +110,17 @@ def sample_frame(scene, frame: int, sheet_name: str, igniters: list, winds: list
         length = np.linalg.norm(axis)
         if length > 0:
             wind += axis / length * ob.field.strength
-    wind *= objects[sheet_name].thinburn.wind_scale
-    return FrameSample(frame, samples, tuple(float(w) for w in wind))
+    settings = objects[sheet_name].thinburn
+    wind *= settings.wind_scale
+    return FrameSample(frame, samples, tuple(float(w) for w in wind), dynamics(scene, settings))
+
+
+def dynamics(scene, settings) -> dict:
+    """The motion parameters now: the sheet's keyframeable ones and the scene's gravity."""
+    values = {key: float(getattr(settings, key)) for key in DYNAMIC_PARAMS}
+    gravity = tuple(float(g) for g in scene.gravity) if scene.use_gravity else (0.0, 0.0, 0.0)
+    values["gravity"] = gravity
+    return values
 
 
 def cache_path(obj, settings) -> tuple:

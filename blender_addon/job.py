@@ -65,7 +65,7 @@ class BakeJob:
         self.n_vertices = len(world)
         self.inverse = np.linalg.inv(self.matrix)
         self.spacing = 0.5 * float(np.ptp(world, axis=0).max()) / settings.cells
-        self.want_particles = core_has_particles()
+        self.want_particles = core_has_particles() and self.shell
         self.particle_frames = []
         self.samples = {}
         self.next_sample = 0      # index of the next frame to sample
@@ -83,11 +83,18 @@ class BakeJob:
     # --- setup -------------------------------------------------------------------------------
     def _simulation_kwargs(self, obj, settings) -> dict:
         kwargs = dict(material=properties.build_material(settings), cells=settings.cells,
-                      seed=settings.seed, front=settings.front)
+                      seed=settings.seed, front=settings.front,
+                      threads=settings.threads or None)
         for key in properties.MODEL_PARAMS:
             kwargs[key] = getattr(settings, key)
-        if core_supports("lattice"):
-            kwargs["lattice"] = settings.lattice
+        self.shell = settings.crumple and core_supports("shell")
+        if core_supports("shell"):
+            kwargs["shell"] = self.shell
+        if self.shell:
+            kwargs["integrator"] = settings.integrator
+            kwargs["lattice"] = settings.lattice or None
+            self.dynamics = inputs.dynamics(self.scene, settings)
+            kwargs.update(self.dynamics)
         if settings.pin_group:
             if not core_supports("pinned"):
                 raise BakeError("this thinburn core cannot pin vertices yet: clear the Pin Group")
@@ -159,7 +166,12 @@ class BakeJob:
             end = None if there is None else there.igniters[i]
             spacing = max(self.spacing, 0.5 * start[2])
             ignitions += path_ignitions(start, end, k * self.dt, self.dt, spacing)
-        return FrameTask(index=k, ignitions=ignitions, wind=here.wind, step=not last)
+        changed = {}
+        if self.shell:
+            changed = {key: v for key, v in here.dynamics.items() if self.dynamics.get(key) != v}
+            self.dynamics.update(changed)
+        return FrameTask(index=k, ignitions=ignitions, wind=here.wind, dynamics=changed,
+                         step=not last)
 
     def _drain(self, block: bool) -> None:
         while not self.finished:

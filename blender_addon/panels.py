@@ -8,7 +8,7 @@ import bpy
 
 from . import job, materials
 from .operators import running_job
-from .properties import MATERIAL_FIELDS, MODEL_PARAMS
+from .properties import DYNAMIC_PARAMS, MATERIAL_FIELDS, MODEL_PARAMS
 
 
 class ThinBurnPhysicsPanel:
@@ -37,10 +37,27 @@ class PHYSICS_PT_thinburn(ThinBurnPhysicsPanel, bpy.types.Panel):
         col = layout.column(align=True)
         col.prop(settings, "cells")
         row = col.row()
-        row.active = job.core_supports("lattice")
+        row.active = settings.crumple and job.core_supports("lattice")
         row.prop(settings, "lattice")
+        layout.prop(settings, "crumple")
         layout.prop(settings, "igniter_collection")
         layout.prop(settings, "wind_scale")
+
+
+class PHYSICS_PT_thinburn_motion(ThinBurnPhysicsPanel, bpy.types.Panel):
+    bl_label = "Motion"
+    bl_parent_id = "PHYSICS_PT_thinburn"
+    bl_options = {"DEFAULT_CLOSED"}
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        settings = context.object.thinburn
+        layout.active = settings.enabled and settings.crumple
+        layout.prop(settings, "integrator")
+        for key in DYNAMIC_PARAMS:
+            layout.prop(settings, key)
+        layout.label(text="Gravity: the scene's (Scene > Gravity)", icon="INFO")
 
 
 class PHYSICS_PT_thinburn_hold(ThinBurnPhysicsPanel, bpy.types.Panel):
@@ -103,6 +120,7 @@ class PHYSICS_PT_thinburn_advanced(ThinBurnPhysicsPanel, bpy.types.Panel):
         layout.active = settings.enabled
         layout.prop(settings, "front")
         layout.prop(settings, "seed")
+        layout.prop(settings, "threads")
         box = layout.column(heading="Material")
         for field in MATERIAL_FIELDS:
             box.prop(settings, "mat_" + field)
@@ -139,7 +157,8 @@ class OBJECT_PT_thinburn_igniter(bpy.types.Panel):
         layout.prop(igniter, "radius")
 
 
-CLASSES = (PHYSICS_PT_thinburn, PHYSICS_PT_thinburn_hold, PHYSICS_PT_thinburn_cache,
+CLASSES = (PHYSICS_PT_thinburn, PHYSICS_PT_thinburn_motion, PHYSICS_PT_thinburn_hold,
+           PHYSICS_PT_thinburn_cache,
            PHYSICS_PT_thinburn_advanced, OBJECT_PT_thinburn_igniter)
 
 

@@ -29,6 +29,15 @@ MATERIAL_FIELDS = {
     "K_flex": ("Flexion Stiffness", "Stiffness of the lattice's bending springs (Table 1)", 0.0, 100.0),
 }
 
+# Motion parameters read every frame (keyframeable) and passed to Simulation.set_dynamics
+# when they change; defaults equal the core's (a test checks). Gravity comes from the scene.
+DYNAMIC_PARAMS = {
+    "buoyancy": ("Buoyancy", "Lift of hot material: N/kg per unit of heat, along world +Z", 1.0, 0.0, 100.0),
+    "wind_drag": ("Wind Drag", "How hard the wind pushes on the sheet, Pa·s/m (force per area per m/s of relative wind)", 1.0, 0.0, 100.0),
+    "friction": ("Friction", "Coulomb friction of the sheet on the floor", 0.5, 0.0, 10.0),
+    "crumple_gain": ("Crumple Gain", "Multiplies how much the burn's bending turns into crumpling motion", 1.0, 0.0, 10.0),
+}
+
 # Model scalars passed as Simulation(**params); defaults equal the core's (a test checks).
 MODEL_PARAMS = {
     "v_floor": ("Speed Floor", "Lowest spread speed as a fraction of V0, so steep folds still burn", 0.05, 0.001, 1.0),
@@ -77,6 +86,9 @@ def _field_props():
     for key, (label, desc, value, lo, hi) in MODEL_PARAMS.items():
         props[key] = FloatProperty(name=label, description=desc, default=value, min=lo, max=hi,
                                    options=STATIC)
+    for key, (label, desc, value, lo, hi) in DYNAMIC_PARAMS.items():
+        props[key] = FloatProperty(name=label, description=desc + "; read every frame",
+                                   default=value, min=lo, soft_max=hi)
     return props
 
 
@@ -95,9 +107,23 @@ class ThinBurnSettings(bpy.types.PropertyGroup):
         description="The sheet is divided into Cells × Cells fire cells (the paper uses 128). "
                     "More cells give finer fronts and cost more")
     lattice: IntProperty(
-        name="Lattice", default=32, min=4, max=512, soft_max=128, options=STATIC,
-        description="Resolution of the mass-spring lattice that crumples the sheet, "
-                    "Lattice × Lattice nodes (used when the core supports crumpling)")
+        name="Lattice", default=0, min=0, max=257, soft_max=64, options=STATIC,
+        description="Resolution of the lattice that carries the sheet's motion, Lattice × Lattice "
+                    "couples; 0 chooses it from the sheet's size and the cells")
+    crumple: BoolProperty(
+        name="Crumple", default=True, options=STATIC,
+        description="Simulate the sheet's motion (paper §4: heat, bending, gravity, wind, fire "
+                    "particles). Off: only the fire runs and the sheet keeps its rest shape")
+    integrator: EnumProperty(
+        name="Integrator", default="implicit", options=STATIC,
+        description="Time integration of the sheet's motion",
+        items=[("implicit", "Implicit", "Backward Euler: stable at frame-sized steps (default)", 0),
+               ("symplectic", "Symplectic", "Symplectic Euler, substepped as stability needs", 1),
+               ("explicit", "Explicit", "The paper's explicit scheme (eqs 13-15), substepped as stability needs", 2)])
+    threads: IntProperty(
+        name="Threads", default=0, min=0, max=1024, options=STATIC,
+        description="Threads of the simulation core; 0 uses every core. The result is the same "
+                    "for any count")
     seed: IntProperty(
         name="Seed", default=0, min=0, options=STATIC,
         description="Seeds the random jitter; the same settings and seed bake the same result")

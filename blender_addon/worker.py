@@ -23,6 +23,7 @@ class FrameTask:
     index: int                      # 0 for the bake's first frame
     ignitions: list = field(default_factory=list)  # (point (3,), time s, radius m)
     wind: tuple = (0.0, 0.0, 0.0)   # m/s, blowing during the step that follows
+    dynamics: dict = field(default_factory=dict)  # motion parameters that changed
     step: bool = True               # False on the last frame
 
 
@@ -102,5 +103,7 @@ class CoreWorker(threading.Thread):
                          np.array(temps, dtype=np.float32, copy=True))
         if task.step:
             sim.wind = task.wind
+            if task.dynamics:
+                sim.set_dynamics(**task.dynamics)
             sim.step(self._dt)
         return ("frame", task.index, positions, lit, particles)

@@ -67,12 +67,19 @@ def make_igniter(sheet, location, lit_from=1, radius=0.03, name="Igniter", key_f
     return empty
 
 
-def setup_bake(sheet, frames=24, cells=32, cache_dir=None):
+def setup_bake(sheet, frames=24, cells=32, cache_dir=None, floor=True):
+    """Bake settings for a test: one core thread (results do not depend on it; the test
+    machine is small) and, by default, a floor at the sheet's lowest point so that it lies
+    still until it burns (without one it falls away from the igniters)."""
     s = sheet.thinburn
     s.enabled = True
     s.cells = cells
     s.frame_start = 1
     s.frame_end = frames
+    s.threads = 1
+    if floor:
+        s.floor_mode = "HEIGHT"
+        s.floor_height = min((sheet.matrix_world @ v.co).z for v in sheet.data.vertices)
     if cache_dir is not None:
         s.cache_dir = str(cache_dir)
     return s

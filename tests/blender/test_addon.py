@@ -34,7 +34,7 @@ def test_every_property_has_a_real_description(addon):
 def test_only_per_frame_inputs_are_animatable(addon):
     props = addon.properties.ThinBurnSettings.bl_rna.properties
     animatable = {p.identifier for p in props if p.is_animatable and p.identifier != "rna_type"}
-    assert animatable - {"name"} == {"wind_scale"}
+    assert animatable - {"name"} == {"wind_scale", *addon.properties.DYNAMIC_PARAMS}
     ig = addon.properties.ThinBurnIgniter.bl_rna.properties
     assert ig["strength"].is_animatable and ig["radius"].is_animatable
 
@@ -58,6 +58,9 @@ def test_model_parameter_defaults_match_the_core(addon):
     obj = make_sheet()
     for key in addon.properties.MODEL_PARAMS:
         assert getattr(obj.thinburn, key) == pytest.approx(getattr(sim.params, key)), key
+    for key in addon.properties.DYNAMIC_PARAMS:
+        assert getattr(obj.thinburn, key) == pytest.approx(sim.params.dynamics[key]), key
+    assert obj.thinburn.integrator == sim.params.dynamics["integrator"]
 
 
 def test_manifest_and_bl_info(addon):
