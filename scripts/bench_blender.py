@@ -55,12 +55,13 @@ def grid(name: str, n: int, size: float = 1.0, z: float = 1.0):
     return obj
 
 
-def bake_thinburn(n: int, frames: int, cells: int, cache: Path) -> dict:
+def bake_thinburn(n: int, frames: int, cells: int, threads: int, cache: Path) -> dict:
     import bpy
     bpy.ops.wm.read_homefile(use_empty=True)
     sheet = grid("Sheet", n)
     s = sheet.thinburn
     s.enabled, s.cells, s.frame_start, s.frame_end = True, cells, 1, frames
+    s.threads = threads
     s.cache_dir = str(cache)
     coll = bpy.data.collections.new("Igniters")
     bpy.context.scene.collection.children.link(coll)
@@ -73,7 +74,8 @@ def bake_thinburn(n: int, frames: int, cells: int, cache: Path) -> dict:
     bpy.ops.thinburn.bake()
     seconds = time.perf_counter() - t0
     ignite = [v.value for v in sheet.data.attributes["thinburn_ignite_time"].data]
-    return {"seconds": seconds, "vertices_ignited": sum(1 for v in ignite if v < 1e8)}
+    return {"threads": threads or os.cpu_count(), "seconds": round(seconds, 3),
+            "vertices_ignited": sum(1 for v in ignite if v < 1e8)}
 
 
 def bake_cloth(n: int, frames: int) -> dict:
@@ -96,6 +98,8 @@ def main(argv=None) -> int:
     ap.add_argument("--grid", type=int, default=128, help="vertices per side")
     ap.add_argument("--frames", type=int, default=250)
     ap.add_argument("--cells", type=int, default=128, help="ThinBurn fire cells per side")
+    ap.add_argument("--threads", type=int, nargs="+", default=[0],
+                    help="ThinBurn core threads, one bake per value (0: every core)")
     ap.add_argument("--out", type=Path, default=ROOT / "bench_out" / "blender.json")
     args = ap.parse_args(argv)
 
@@ -104,27 +108,31 @@ def main(argv=None) -> int:
         enable_addon(user)
         import bpy
         import thinburn
-        ours = bake_thinburn(args.grid, args.frames, args.cells, user / "cache")
+        ours = [bake_thinburn(args.grid, args.frames, args.cells, t, user / "cache")
+                for t in args.threads]
         cloth = bake_cloth(args.grid, args.frames)
     finally:
         shutil.rmtree(user, ignore_errors=True)
+    for run in ours:
+        run["ratio_cloth_over_thinburn"] = round(cloth["seconds"] / run["seconds"], 2)
     result = {
         "grid": args.grid, "frames": args.frames, "cells": args.cells,
-        "thinburn_bake_s": round(ours["seconds"], 3),
+        "thinburn_bake_s": ours[0]["seconds"],
         "blender_cloth_bake_s": round(cloth["seconds"], 3),
-        "ratio_cloth_over_thinburn": round(cloth["seconds"] / ours["seconds"], 2),
-        "thinburn_vertices_ignited": ours["vertices_ignited"],
+        "ratio_cloth_over_thinburn": ours[0]["ratio_cloth_over_thinburn"],
+        "thinburn_runs": ours,
         "cloth_quality_steps": cloth["quality"], "cloth_baked": cloth["baked"],
-        "thinburn_threads": thinburn.get_threads(), "cpu_count": os.cpu_count(),
+        "cpu_count": os.cpu_count(),
         "blender": bpy.app.version_string, "thinburn": thinburn.__version__,
         "python": platform.python_version(), "machine": platform.machine(),
     }
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(result, indent=2) + "\n")
     print(json.dumps(result, indent=2))
-    print(f"ThinBurn bake {result['thinburn_bake_s']} s, Blender cloth bake "
-          f"{result['blender_cloth_bake_s']} s: {result['ratio_cloth_over_thinburn']}x "
-          f"(saved {args.out})")
+    for run in ours:
+        print(f"ThinBurn bake ({run['threads']} threads) {run['seconds']} s, Blender cloth bake "
+              f"{result['blender_cloth_bake_s']} s: {run['ratio_cloth_over_thinburn']}x")
+    print(f"saved {args.out}")
     return 0
 
 
