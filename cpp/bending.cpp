@@ -1,5 +1,6 @@
 #include "bending.hpp"
 
+#include <cmath>
 #include <stdexcept>
 
 namespace thinburn {
@@ -41,8 +42,11 @@ void Bending::set_pyrolysis(const RowMatX3& control, const RowMatX3& ignition_po
 
 void Bending::rotation(Eigen::VectorXd& out) const {
   out.resize(couples_);
-  for (int c = 0; c < couples_; ++c)
-    out[c] = p_.alpha * (heat_[2 * c + 1] - heat_[2 * c]) + p_.beta * (pyro_[2 * c + 1] - pyro_[2 * c]);
+  const double dmax = p_.max_rotation;
+  for (int c = 0; c < couples_; ++c) {
+    const double raw = p_.alpha * (heat_[2 * c + 1] - heat_[2 * c]) + p_.beta * (pyro_[2 * c + 1] - pyro_[2 * c]);
+    out[c] = dmax > 0 ? dmax * std::tanh(raw / dmax) : raw;
+  }
 }
 
 }  // namespace thinburn

@@ -15,6 +15,7 @@ struct BendingParams {
   double alpha = 1.0;      ///< eq 6 radians per unit heat difference
   double beta = 1e-3;      ///< eq 6 radians per unit pyrolysis difference
   double d_min = 0.005;    ///< m, guards d → 0 in eqs 2 and 3
+  double max_rotation = 1.2; ///< rad: |D| saturates smoothly here (D = Dmax tanh(D_raw / Dmax))
   double tolerance = 0.01; ///< relative error bound of the fast kernel sums
   bool fast = true;        ///< octree sums (false: the direct all-pairs reference)
 };
@@ -30,7 +31,9 @@ class Bending {
                          const Eigen::VectorXd& temperature, double dt);
   /// @brief Eq 3: pyrolysis at the control vertices from the ignition points (recomputed).
   void set_pyrolysis(const RowMatX3& control, const RowMatX3& ignition_points);
-  /// @brief Eqs 4-6: D = alpha (T_top - T_bottom) + beta (P_top - P_bottom) per couple.
+  /// @brief Eqs 4-6: D = alpha (T_top - T_bottom) + beta (P_top - P_bottom) per couple,
+  /// saturated at max_rotation: heat keeps accumulating (eq 2) but a charred area cannot
+  /// fold over more than about 70 degrees about its couple.
   void rotation(Eigen::VectorXd& out) const;
 
   const Eigen::VectorXd& heat() const { return heat_; }

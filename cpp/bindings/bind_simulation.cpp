@@ -73,7 +73,7 @@ void define_params(py::module_& m) {
       .def_property_readonly("bending", [](const SimulationParams& s) {
         const BendingParams& b = s.bending;
         return py::dict(py::arg("ct") = b.ct, py::arg("cp") = b.cp, py::arg("alpha") = b.alpha,
-                        py::arg("beta") = b.beta, py::arg("d_min") = b.d_min,
+                        py::arg("beta") = b.beta, py::arg("d_min") = b.d_min, py::arg("max_rotation") = b.max_rotation,
                         py::arg("heat_tolerance") = b.tolerance, py::arg("heat_fast") = b.fast);
       });
 }
@@ -82,7 +82,8 @@ void apply_bending_kwargs(BendingParams& b, const py::dict& kw) {
   for (const auto& item : kw) {
     const std::string k = item.first.cast<std::string>();
     double* d = k == "ct" ? &b.ct : k == "cp" ? &b.cp : k == "alpha" ? &b.alpha : k == "beta" ? &b.beta
-              : k == "d_min" ? &b.d_min : k == "heat_tolerance" ? &b.tolerance : nullptr;
+              : k == "d_min" ? &b.d_min : k == "heat_tolerance" ? &b.tolerance
+              : k == "max_rotation" ? &b.max_rotation : nullptr;
     if (d)
       *d = item.second.cast<double>();
     else if (k == "heat_fast")
@@ -93,6 +94,7 @@ void apply_bending_kwargs(BendingParams& b, const py::dict& kw) {
   if (!(b.d_min > 0)) throw std::invalid_argument("d_min must be > 0");
   if (!(b.tolerance > 0 && b.tolerance < 1)) throw std::invalid_argument("heat_tolerance must be in (0, 1)");
   if (!(b.ct >= 0) || !(b.cp >= 0)) throw std::invalid_argument("ct and cp must be >= 0");
+  if (!(b.max_rotation >= 0) || !std::isfinite(b.max_rotation)) throw std::invalid_argument("max_rotation must be >= 0");
   if (!std::isfinite(b.alpha) || !std::isfinite(b.beta)) throw std::invalid_argument("alpha and beta must be finite");
 }
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 import json
 import os
 import time
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -14,79 +15,152 @@ from .scenes import A4, rect_sheet
 from .simulation import Simulation
 
 
-def default_scene(material="paper", cells=128, seed=0, threads=None):
-    """An A4 sheet lying flat, lit at one corner: (simulation, description)."""
-    verts, faces = rect_sheet(A4[0], A4[1], nx=43, ny=61)
-    sim = Simulation(verts, faces, material=material, cells=cells, seed=seed, threads=threads)
-    corner = np.array([0.004, 0.004, 0.0])
-    sim.ignite(corner, time=0.0, radius=0.006)
-    return sim, f"A4 sheet of {material} lying flat, lit at the corner (0, 0)"
+@dataclass
+class Scene:
+    """A built-in scene: a mesh, how it is held, where it is lit, and its conditions."""
+
+    description: str
+    vertices: np.ndarray
+    faces: np.ndarray
+    ignite_at: tuple
+    ignite_radius: float
+    floor: float | None = None
+    pinned: np.ndarray | None = None
+    wind: tuple = (0.0, 0.0, 0.0)
+    params: dict = field(default_factory=dict)
+
+
+def default_scene(material="paper") -> Scene:
+    """The scene for a material, after the paper's figures.
+
+    paper, hard_paper: an A4 sheet lying on a table, lit at a corner (Figs 8, 10).
+    cloth, silk: a 40 cm square held at its four corners above a table, lit at a corner
+    (Figs 9, 11): the denser cloth sags and sinks as it burns.
+    curtain: a 1 m × 1.4 m curtain hanging from its top edge, wind from behind, lit at the
+    bottom (Fig. 12); flames climb faster than they descend.
+    """
+    if material in ("cloth", "silk"):
+        v, f = rect_sheet(0.4, 0.4, nx=41, ny=41, z=0.25)
+        corners = [0, 40, 41 * 40, 41 * 41 - 1]
+        return Scene(f"40 cm square of {material} held at its corners 25 cm above a table, lit at a corner",
+                     v, f, (0.03, 0.03, 0.25), 0.012, floor=0.0, pinned=np.array(corners))
+    if material == "curtain":
+        v, f = rect_sheet(1.0, 1.4, nx=41, ny=57, vertical=True, z=0.05)
+        top = np.flatnonzero(np.isclose(v[:, 2], v[:, 2].max()))
+        return Scene("1 m × 1.4 m curtain hanging from its top edge, wind from behind, lit at the bottom",
+                     v, f, (0.5, 0.0, 0.06), 0.02, pinned=top, wind=(0.0, 1.5, 0.0),
+                     params=dict(climb=0.4))
+    v, f = rect_sheet(A4[0], A4[1], nx=43, ny=61)
+    return Scene(f"A4 sheet of {material} lying on a table, lit at a corner", v, f,
+                 (0.004, 0.004, 0.0), 0.006, floor=0.0)
+
+
+def build(scene: Scene, material="paper", cells=128, seed=0, threads=None) -> Simulation:
+    sim = Simulation(scene.vertices, scene.faces, material=material, cells=cells, seed=seed,
+                     threads=threads, floor=scene.floor, pinned=scene.pinned, **scene.params)
+    sim.wind = scene.wind
+    sim.ignite(scene.ignite_at, time=0.0, radius=scene.ignite_radius)
+    return sim
 
 
 def run_demo(out_dir, material="paper", cells=128, fps=24.0, max_time=240.0, frames=60, seed=0,
              threads=None, quiet=False) -> dict:
-    """Burn the default scene until nothing is left burning; write PNG frames, a GIF and arrays.
-
-    Returns a summary dict (also written to summary.json).
-    """
+    """Burn the material's scene until nothing is left burning; write PNG frames, a GIF,
+    the per-frame arrays and a summary. Returns the summary (also in summary.json)."""
     os.makedirs(out_dir, exist_ok=True)
-    sim, description = default_scene(material, cells, seed, threads)
+    scene = default_scene(material)
+    sim = build(scene, material, cells, seed, threads)
     dt = 1.0 / fps
-    aspect = A4[1] / A4[0]
-    # A first pass finds how long the burn takes, so the frames span the whole of it.
-    expected_steps = int(np.ceil(_estimate_duration(sim, max_time) / dt))
+    expected = _expected_duration(scene, material, max_time)
+    expected_steps = int(np.ceil(expected / dt))
     record_every = max(1, int(round(expected_steps / frames)))
-    sim, _ = default_scene(material, cells, seed, threads)
     progress = None if quiet else Progress(expected_steps, label=f"burning {material}")
-    store = {"time": [], "cell_states": [], "cell_char": [], "vertex_positions": [], "vertex_char": []}
-    images, step, t0 = [], 0, time.perf_counter()
-    while True:
-        sim.step(dt)
-        step += 1
-        states = sim.cell_states()
-        done = not np.any(states == 1) or sim.time >= max_time
-        if step % record_every == 0 or done:
-            _record(sim, states, store)
-            images.append(render.cell_image(states, sim.cell_char(), sim.inside(), material, aspect))
-        if progress is not None:
-            progress.update(min(step, progress.total - (not done)),
-                            f"t={sim.time:6.1f}s burning={int(np.sum(states == 1))}")
-        if done:
-            break
+    renderer = render.SceneRenderer(scene.faces, sim.vertex_positions(), material, scene.floor)
+    store = {k: [] for k in ("time", "cell_states", "cell_char", "vertex_positions", "vertex_char",
+                             "lattice_positions")}
+    particle_frames, images, step, t0, sim_seconds = [], [], 0, time.perf_counter(), 0.0
+    aspect = _aspect(sim)
+    try:
+        while True:
+            t_step = time.perf_counter()
+            sim.step(dt)
+            sim_seconds += time.perf_counter() - t_step
+            step += 1
+            states = sim.cell_states()
+            done = not np.any(states == 1) or sim.time >= max_time
+            if step % record_every == 0 or done:
+                _record(sim, states, store, particle_frames)
+                images.append(_picture(sim, states, renderer, material, aspect))
+            if progress is not None:
+                progress.update(min(step, expected_steps - (not done)) if not done else expected_steps,
+                                f"t={sim.time:6.1f}s burning={int(np.sum(states == 1))}")
+            if done:
+                break
+    finally:
+        renderer.close()
     wall = time.perf_counter() - t0
-    return _write_outputs(out_dir, sim, store, images, description, material, cells, fps, step, wall)
+    return _write_outputs(out_dir, sim, store, particle_frames, images, scene, material, cells, fps,
+                          step, wall, sim_seconds)
 
 
-def _estimate_duration(sim, max_time) -> float:
-    dt = 0.5
-    while sim.time < max_time:
-        sim.step(dt)
-        if not np.any(sim.cell_states() == 1):
+def _expected_duration(scene, material, max_time) -> float:
+    """The burn's length from the fire alone (cheap: no shell), for the progress bar and the
+    frame spacing."""
+    probe = Simulation(scene.vertices, scene.faces, material=material, cells=48, shell=False,
+                       **{k: v for k, v in scene.params.items() if k in ("climb",)})
+    probe.ignite(scene.ignite_at, time=0.0, radius=scene.ignite_radius)
+    while probe.time < max_time:
+        probe.step(1.0)
+        if not np.any(probe.cell_states() == 1):
             break
-    return sim.time
+    return min(probe.time, max_time)
 
 
-def _record(sim, states, store) -> None:
+def _aspect(sim) -> float:
+    dv, du = sim.cell_size
+    return dv / du
+
+
+def _vertex_states(sim) -> np.ndarray:
+    ign, out = sim.vertex_ignition_times(), sim.vertex_burnout_times()
+    return np.where(sim.time < ign, 0, np.where(sim.time < out, 1, 2)).astype(np.uint8)
+
+
+def _picture(sim, states, renderer, material, aspect) -> np.ndarray:
+    cell_img = render.cell_image(states, sim.cell_char(), sim.inside(), material, aspect, width=240)
+    return renderer.frame(sim.vertex_positions(), sim.vertex_char(), _vertex_states(sim), cell_img,
+                          sim.particles(), title=f"{material}   t = {sim.time:5.1f} s")
+
+
+def _record(sim, states, store, particle_frames) -> None:
     store["time"].append(sim.time)
     store["cell_states"].append(states)
     store["cell_char"].append(sim.cell_char().astype(np.float32))
     store["vertex_positions"].append(sim.vertex_positions().astype(np.float32))
     store["vertex_char"].append(sim.vertex_char().astype(np.float32))
+    store["lattice_positions"].append(sim.lattice_positions().astype(np.float32))
+    p, t = sim.particles()
+    particle_frames.append(np.column_stack([p, t]).astype(np.float32))
 
 
-def _write_outputs(out_dir, sim, store, images, description, material, cells, fps, steps, wall):
+def _write_outputs(out_dir, sim, store, particle_frames, images, scene, material, cells, fps, steps,
+                   wall, sim_seconds):
     frame_dir = os.path.join(out_dir, "frames")
     os.makedirs(frame_dir, exist_ok=True)
     for k, img in enumerate(images):
         render.save_png(img, os.path.join(frame_dir, f"frame_{k:04d}.png"))
     render.save_gif(images, os.path.join(out_dir, "burn.gif"), fps=12)
     arrays = {k: np.asarray(v) for k, v in store.items()}
+    # Particle counts differ per frame: one (k, 4) array [x, y, z, temperature] per frame.
+    arrays.update({f"particles_{k:04d}": p for k, p in enumerate(particle_frames)})
+    arrays["faces"] = scene.faces
     np.savez_compressed(os.path.join(out_dir, "frames.npz"), **arrays)
     burnt = float(np.mean(sim.cell_states()[sim.inside() == 1] == 2))
     summary = {
-        "scene": description, "material": material, "cells": cells, "fps": fps,
-        "simulated_seconds": round(sim.time, 3), "steps": steps, "wall_seconds": round(wall, 3),
-        "steps_per_second": round(steps / wall, 1) if wall > 0 else None,
+        "scene": scene.description, "material": material, "cells": cells, "lattice": sim.lattice_size,
+        "fps": fps, "simulated_seconds": round(sim.time, 3), "steps": steps,
+        "wall_seconds": round(wall, 3), "simulation_seconds": round(sim_seconds, 3),
+        "simulated_frames_per_second": round(steps / sim_seconds, 1) if sim_seconds > 0 else None,
         "frames_written": len(images), "burnt_fraction": round(burnt, 4),
         "outputs": ["frames/frame_*.png", "burn.gif", "frames.npz", "summary.json"],
     }

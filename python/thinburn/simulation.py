@@ -18,7 +18,7 @@ INTEGRATORS = ("implicit", "symplectic", "explicit")
 DYNAMICS_KEYS = ("k_thickness", "k_transverse", "stiffness_unit", "buoyancy", "wind_drag", "friction",
                  "crumple_gain", "plasticity", "sleep_speed", "sleeping", "substeps", "max_substeps",
                  "safety", "max_stretch", "cg_tolerance", "cg_max_iterations", "gravity")
-BENDING_KEYS = ("ct", "alpha", "beta", "d_min", "heat_tolerance", "heat_fast")
+BENDING_KEYS = ("ct", "alpha", "beta", "d_min", "max_rotation", "heat_tolerance", "heat_fast")
 PARTICLE_PREFIX = "particle_"
 PARTICLE_KEYS = ("capacity", "birth_rate", "temperature0", "cooling", "lifetime", "lifetime_jitter",
                  "buoyancy", "drag", "turbulence", "birth_speed", "vertical_band")
@@ -65,7 +65,7 @@ class Simulation:
         * the fire: ``cv``, ``v_floor``, ``speed_noise``, ``duration_noise``, ``climb``
           (flames climb: drive toward world-up, 0 = the paper's symmetric law),
           ``wind_spread`` (front drive per m/s of wind), ``max_drive``, ``ash_fraction``;
-        * the bending (eqs 2-6): ``ct``, ``alpha``, ``beta``, ``d_min``,
+        * the bending (eqs 2-6): ``ct``, ``alpha``, ``beta``, ``d_min``, ``max_rotation``,
           ``heat_tolerance``, ``heat_fast``;
         * the motion: ``k_thickness``, ``k_transverse``, ``stiffness_unit``, ``buoyancy``,
           ``wind_drag``, ``friction``, ``crumple_gain``, ``plasticity``, ``sleep_speed``,
