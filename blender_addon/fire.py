@@ -31,6 +31,9 @@ def fire_group():
     interface_socket(tree, "Geometry", "INPUT", "NodeSocketGeometry")
     interface_socket(tree, "Count", "INPUT", "NodeSocketInt", 1, 0, desc="Particle slots in the cache")
     interface_socket(tree, "Radius", "INPUT", "NodeSocketFloat", 0.004, 0.0, desc="Radius of a fire particle, m")
+    interface_socket(tree, "Min Temperature", "INPUT", "NodeSocketFloat", 150.0, 0.0,
+                     desc="Particles cooler than this (K above ambient) are left out: they no "
+                          "longer glow, and fewer see-through particles render faster")
     interface_socket(tree, "Material", "INPUT", "NodeSocketMaterial")
     interface_socket(tree, "Geometry", "OUTPUT", "NodeSocketGeometry")
     gi = node(tree, "NodeGroupInput", -900, 0)
@@ -52,9 +55,15 @@ def fire_group():
     live = node(tree, "FunctionNodeCompare", -50, -200, data_type="FLOAT", operation="GREATER_THAN")
     tree.links.new(split.outputs["Y"], live.inputs[0])
     set_input(live, "B", 0.5)
+    hot = node(tree, "FunctionNodeCompare", -50, -400, data_type="FLOAT", operation="GREATER_EQUAL")
+    tree.links.new(split.outputs["X"], hot.inputs[0])
+    tree.links.new(gi.outputs["Min Temperature"], hot.inputs[1])
+    glowing = node(tree, "FunctionNodeBooleanMath", 150, -300, operation="AND")
+    tree.links.new(live.outputs[0], glowing.inputs[0])
+    tree.links.new(hot.outputs[0], glowing.inputs[1])
     keep = node(tree, "FunctionNodeBooleanMath", 150, 0, operation="AND")
     tree.links.new(first.outputs[0], keep.inputs[0])
-    tree.links.new(live.outputs[0], keep.inputs[1])
+    tree.links.new(glowing.outputs[0], keep.inputs[1])
     store = node(tree, "GeometryNodeStoreNamedAttribute", 150, 250, data_type="FLOAT", domain="POINT")
     set_input(store, "Name", "temperature")
     tree.links.new(gi.outputs["Geometry"], store.inputs["Geometry"])
@@ -70,8 +79,15 @@ def fire_group():
     return tree
 
 
+AMBIENT_K = 293.15      # the core's particle temperatures are kelvin above ambient
+FLAME_K = 900.0         # a particle's temperature at birth (the core's temperature0)
+FLAME_STRENGTH = 20.0   # emission strength of a particle at FLAME_K
+
+
 def fire_material():
-    """Emission from the particles' temperature attribute (kelvin) through a blackbody."""
+    """Glowing, see-through flame particles: a blackbody emission of the particle's absolute
+    temperature, brightness ~ (T / FLAME_K)^4 (Stefan-Boltzmann), added to a transparent
+    BSDF so that cooled particles fade out instead of turning into black beads."""
     mat = bpy.data.materials.get(FIRE_GROUP)
     if mat is not None:
         return mat
@@ -79,24 +95,30 @@ def fire_material():
     use_nodes(mat)
     tree = mat.node_tree
     tree.nodes.clear()
-    temp = node(tree, "ShaderNodeAttribute", -600, 0, attribute_type="GEOMETRY", attribute_name="temperature")
-    body = node(tree, "ShaderNodeBlackbody", -350, 100)
-    tree.links.new(temp.outputs["Fac"], body.inputs["Temperature"])
-    # Brightness grows with temperature (Stefan-Boltzmann ~T^4), scaled so 1500 K gives 5.
-    ratio = node(tree, "ShaderNodeMath", -350, -100, operation="DIVIDE")
+    temp = node(tree, "ShaderNodeAttribute", -800, 0, attribute_type="GEOMETRY", attribute_name="temperature")
+    absolute = node(tree, "ShaderNodeMath", -550, 150, operation="ADD")
+    tree.links.new(temp.outputs["Fac"], absolute.inputs[0])
+    absolute.inputs[1].default_value = AMBIENT_K
+    body = node(tree, "ShaderNodeBlackbody", -350, 150)
+    tree.links.new(absolute.outputs[0], body.inputs["Temperature"])
+    ratio = node(tree, "ShaderNodeMath", -550, -100, operation="DIVIDE")
     tree.links.new(temp.outputs["Fac"], ratio.inputs[0])
-    ratio.inputs[1].default_value = 1500.0
-    power = node(tree, "ShaderNodeMath", -150, -100, operation="POWER")
+    ratio.inputs[1].default_value = FLAME_K
+    power = node(tree, "ShaderNodeMath", -350, -100, operation="POWER")
     tree.links.new(ratio.outputs[0], power.inputs[0])
     power.inputs[1].default_value = 4.0
-    scale = node(tree, "ShaderNodeMath", 50, -100, operation="MULTIPLY")
+    scale = node(tree, "ShaderNodeMath", -150, -100, operation="MULTIPLY")
     tree.links.new(power.outputs[0], scale.inputs[0])
-    scale.inputs[1].default_value = 5.0
-    emit = node(tree, "ShaderNodeEmission", 250, 0)
+    scale.inputs[1].default_value = FLAME_STRENGTH
+    emit = node(tree, "ShaderNodeEmission", 50, 50)
     tree.links.new(body.outputs[0], emit.inputs["Color"])
     tree.links.new(scale.outputs[0], emit.inputs["Strength"])
+    clear = node(tree, "ShaderNodeBsdfTransparent", 50, -150)
+    add = node(tree, "ShaderNodeAddShader", 250, 0)
+    tree.links.new(clear.outputs[0], add.inputs[0])
+    tree.links.new(emit.outputs[0], add.inputs[1])
     out = node(tree, "ShaderNodeOutputMaterial", 450, 0)
-    tree.links.new(emit.outputs[0], out.inputs["Surface"])
+    tree.links.new(add.outputs[0], out.inputs["Surface"])
     return mat
 
 
@@ -133,6 +155,7 @@ def apply_particles(obj, sheet_pc2_path: str, frames, frame_start: float) -> Non
         mesh = bpy.data.meshes.new(name)
         mesh.vertices.add(2 * count)
         fire = bpy.data.objects.new(name, mesh)
+        fire.visible_shadow = False  # flames light the scene; they cast no shadow
         for coll in obj.users_collection:
             coll.objects.link(fire)
     md = ensure_modifier(fire, CACHE_MODIFIER, "MESH_CACHE", 0)

@@ -77,15 +77,17 @@ def test_fire_particles_become_an_emitting_point_cloud(addon, tmp_path):
     sheet = make_sheet()
     rng = np.random.default_rng(1)
     frames = []
-    for k in (3, 0, 5):
+    for k in (3, 0, 5):  # K above ambient; below 150 K a particle is left out
         frames.append((rng.uniform(-0.1, 0.1, size=(k, 3)).astype(np.float32),
-                       np.linspace(900.0, 1500.0, k, dtype=np.float32)))
+                       np.linspace(100.0, 900.0, k, dtype=np.float32)))
     pc2 = str(tmp_path / "Sheet.pc2")
     addon.fire.apply_particles(sheet, pc2, frames, frame_start=1.0)
     fire = bpy.data.objects["ThinBurn Fire Sheet"]
     head, data = addon.cache.read_pc2(tmp_path / "Sheet_fire.pc2")
     assert head["points"] == 10 and head["samples"] == 3
     for frame, (pos, temp) in enumerate(frames, start=1):
+        glowing = temp >= 150.0
+        pos, temp = pos[glowing], temp[glowing]
         bpy.context.scene.frame_set(frame)
         dg = bpy.context.evaluated_depsgraph_get()
         geo = bpy.types.GeometrySet.from_evaluated_object(fire.evaluated_get(dg))
