@@ -132,6 +132,10 @@ class LatticeDynamics {
   void explicit_substep(double h, bool paper);
   int implicit_substep(double h);
   void implicit_assemble(double h);
+  void implicit_rhs(double h);
+  int implicit_solve(double h);
+  bool add_landings(double h);
+  Eigen::Vector3d substep_drift(int v, double h) const;
   void apply_A(double h, const double* in, double* out);
   void precondition(const double* in, double* out);
   void apply_floor(double h);
