@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 bpy = pytest.importorskip("bpy")
+pytestmark = pytest.mark.blender
 
 from blender_helpers import ROOT, make_sheet  # noqa: E402
 

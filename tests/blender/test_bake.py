@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 bpy = pytest.importorskip("bpy")
+pytestmark = pytest.mark.blender
 
 from blender_helpers import (evaluated_positions, make_igniter, make_sheet,  # noqa: E402
                              point_attribute, setup_bake)

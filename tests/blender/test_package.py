@@ -10,6 +10,7 @@ from pathlib import Path
 import pytest
 
 bpy = pytest.importorskip("bpy")
+pytestmark = pytest.mark.blender
 
 from blender_helpers import ROOT, disable_legacy, enable_legacy  # noqa: E402
 

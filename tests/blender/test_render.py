@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 bpy = pytest.importorskip("bpy")
+pytestmark = pytest.mark.blender
 
 from blender_helpers import make_igniter, make_sheet, point_attribute, setup_bake  # noqa: E402
 
