@@ -1,0 +1,143 @@
+"""Reading a bake's inputs from the scene. Main thread only (this is where bpy is touched)."""
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+
+import bpy
+import numpy as np
+
+from .properties import DYNAMIC_PARAMS
+
+
+class BakeError(Exception):
+    """A setting that stops the bake; its text is what the artist sees."""
+
+
+@dataclass
+class FrameSample:
+    """What the scene says at one frame: each igniter's (position, strength, radius), the wind."""
+
+    frame: int
+    igniters: list
+    wind: tuple
+    dynamics: dict  # the keyframeable motion parameters and the scene's gravity
+
+
+def sheet_geometry(obj):
+    """(world vertices (n, 3), triangles (m, 3), world matrix (4, 4)) of the original mesh."""
+    mesh = obj.data
+    n = len(mesh.vertices)
+    mesh.calc_loop_triangles()
+    m = len(mesh.loop_triangles)
+    if n < 3 or m == 0:
+        raise BakeError(f"'{obj.name}' has no faces: ThinBurn burns a sheet made of faces "
+                        f"({n} vertices, {m} triangles)")
+    co = np.empty(3 * n, dtype=np.float32)
+    mesh.vertices.foreach_get("co", co)
+    tris = np.empty(3 * m, dtype=np.int32)
+    mesh.loop_triangles.foreach_get("vertices", tris)
+    mw = np.array(obj.matrix_world, dtype=np.float64)
+    world = co.reshape(n, 3).astype(np.float64) @ mw[:3, :3].T + mw[:3, 3]
+    return world, tris.reshape(m, 3), mw
+
+
+def pin_mask(obj, group_name: str) -> np.ndarray:
+    """(n,) bool: the vertices of the pin group with weight above 0.5."""
+    group = obj.vertex_groups.get(group_name)
+    if group is None:
+        raise BakeError(f"pin group '{group_name}' is not a vertex group of '{obj.name}'")
+    mask = np.zeros(len(obj.data.vertices), dtype=bool)
+    index = group.index
+    for v in obj.data.vertices:
+        for g in v.groups:
+            if g.group == index and g.weight > 0.5:
+                mask[v.index] = True
+    return mask
+
+
+def floor_height(scene, settings):
+    """World height of the floor, or None."""
+    if settings.floor_mode == "HEIGHT":
+        return float(settings.floor_height)
+    if settings.floor_mode == "OBJECT":
+        if settings.floor_object is None:
+            raise BakeError("floor is set to Object but no floor object is chosen")
+        return float(settings.floor_object.matrix_world.translation.z)
+    return None
+
+
+def igniter_objects(obj, settings) -> list:
+    """The igniters of a sheet (names), or a BakeError that says what to do."""
+    coll = settings.igniter_collection
+    if coll is None:
+        raise BakeError(f"no igniters: set an Igniter collection on '{obj.name}' "
+                        "(Physics > ThinBurn) and put an Empty in it")
+    names = [o.name for o in coll.all_objects if o.name != obj.name]
+    if not names:
+        raise BakeError(f"no igniters: the collection '{coll.name}' is empty; add an Empty "
+                        "and keyframe its ThinBurn Igniter strength")
+    return names
+
+
+def wind_objects(view_layer) -> list:
+    """Names of the Wind force fields in the view layer."""
+    return [o.name for o in view_layer.objects
+            if o.field is not None and o.field.type == "WIND"]
+
+
+def sample_frame(scene, frame: int, sheet_name: str, igniters: list, winds: list) -> FrameSample:
+    """Move the scene to ``frame`` and read the igniters and the wind.
+
+    frame_set evaluates the scene and writes animated values and world matrices back to the
+    original objects (those of the active depsgraph), which is what is read here.
+    """
+    scene.frame_set(frame)
+    objects = bpy.data.objects
+    for name in (sheet_name, *igniters, *winds):
+        if objects.get(name) is None:
+            raise BakeError(f"'{name}' was deleted or renamed during the bake")
+    samples = []
+    for name in igniters:
+        ob = objects[name]
+        ig = ob.thinburn_igniter
+        samples.append((np.array(ob.matrix_world.translation, dtype=np.float64),
+                        float(ig.strength), float(ig.radius)))
+    wind = np.zeros(3)
+    for name in winds:
+        ob = objects[name]
+        axis = np.array(ob.matrix_world.to_3x3().col[2], dtype=np.float64)
+        length = np.linalg.norm(axis)
+        if length > 0:
+            wind += axis / length * ob.field.strength
+    settings = objects[sheet_name].thinburn
+    wind *= settings.wind_scale
+    return FrameSample(frame, samples, tuple(float(w) for w in wind), dynamics(scene, settings))
+
+
+def dynamics(scene, settings) -> dict:
+    """The motion parameters now: the sheet's keyframeable ones and the scene's gravity."""
+    values = {key: float(getattr(settings, key)) for key in DYNAMIC_PARAMS}
+    gravity = tuple(float(g) for g in scene.gravity) if scene.use_gravity else (0.0, 0.0, 0.0)
+    values["gravity"] = gravity
+    return values
+
+
+def cache_path(obj, settings) -> tuple:
+    """(path for the modifier as the artist wrote it, absolute path) of the sheet's PC2 file."""
+    raw = settings.cache_dir.strip()
+    if not raw:
+        raise BakeError("the cache folder is empty: choose a folder for the bake")
+    if raw.startswith("//") and not bpy.data.filepath:
+        raise BakeError(f"the cache folder '{raw}' is relative to the .blend file, which is not "
+                        "saved yet: save the file or choose an absolute folder")
+    name = bpy.path.clean_name(obj.name) + ".pc2"
+    folder = bpy.path.abspath(raw)
+    try:
+        os.makedirs(folder, exist_ok=True)
+    except OSError as exc:
+        raise BakeError(f"cannot create the cache folder '{folder}': {exc.strerror or exc}") from None
+    if not os.access(folder, os.W_OK):
+        raise BakeError(f"the cache folder '{folder}' is not writable")
+    shown = raw if raw.endswith(("/", "\\")) else raw + "/"
+    return shown + name, os.path.join(folder, name)

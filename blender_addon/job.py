@@ -1,0 +1,232 @@
+"""A bake in progress: main-thread bookkeeping around the worker thread.
+
+The modal operator calls ``tick()`` on every timer event and ``cancel()`` on Esc; in
+background mode the operator calls ``run()``, which ticks until done. Everything here runs on
+the main thread; the worker (worker.py) never sees bpy.
+"""
+from __future__ import annotations
+
+import inspect
+import queue
+import time as _time
+
+import bpy
+import numpy as np
+import thinburn
+
+from . import cache, fire, inputs, materials, properties
+from .inputs import BakeError
+from .worker import CoreWorker, FrameTask, path_ignitions
+
+LOOKAHEAD = 4  # frames sampled ahead of the worker
+
+
+def core_supports(name: str) -> bool:
+    """Whether thinburn.Simulation accepts the keyword ``name``."""
+    return name in inspect.signature(thinburn.Simulation.__init__).parameters
+
+
+def core_has_particles() -> bool:
+    return hasattr(thinburn.Simulation, "particles")
+
+
+class BakeJob:
+    """Bake ``obj`` frame by frame; the previous bake is replaced only when all frames are in."""
+
+    def __init__(self, context, obj):
+        self.obj_name = obj.name
+        self.scene = context.scene
+        settings = obj.thinburn
+        if obj.type != "MESH":
+            raise BakeError(f"'{obj.name}' is not a mesh")
+        if settings.frame_end <= settings.frame_start:
+            raise BakeError(f"the frame range {settings.frame_start}–{settings.frame_end} is empty: "
+                            "End must be after Start")
+        self.frames = list(range(settings.frame_start, settings.frame_end + 1))
+        self.fps = self.scene.render.fps / self.scene.render.fps_base
+        self.dt = 1.0 / self.fps
+        self.igniters = inputs.igniter_objects(obj, settings)
+        self.winds = inputs.wind_objects(context.view_layer)
+        self.frame_restore = self.scene.frame_current
+        # The sheet's rest state (its transform, the floor) is read at the first frame.
+        self.scene.frame_set(self.frames[0])
+        try:
+            world, tris, self.matrix = inputs.sheet_geometry(obj)
+            kwargs = self._simulation_kwargs(obj, settings)
+            self.modifier_path, self.abs_path = inputs.cache_path(obj, settings)
+            self.writer = cache.PC2Writer(self.abs_path, len(world), start_frame=float(self.frames[0]))
+        except OSError as exc:
+            self._restore_frame()
+            raise BakeError(f"cannot write the cache file in '{settings.cache_dir}': "
+                            f"{exc.strerror or exc}") from None
+        except BakeError:
+            self._restore_frame()
+            raise
+        self.n_vertices = len(world)
+        self.inverse = np.linalg.inv(self.matrix)
+        self.spacing = 0.5 * float(np.ptp(world, axis=0).max()) / settings.cells
+        self.want_particles = core_has_particles() and self.shell
+        self.particle_frames = []
+        self.samples = {}
+        self.next_sample = 0      # index of the next frame to sample
+        self.next_task = 0        # index of the next frame to hand to the worker
+        self.frames_done = 0
+        self.lit = 0
+        self.finished = False
+        self.started = _time.perf_counter()
+        self.elapsed = 0.0
+        self.message = ""
+        self.worker = CoreWorker(lambda: thinburn.Simulation(world, tris, **kwargs), self.dt,
+                                 self.want_particles)
+        self.worker.start()
+
+    # --- setup -------------------------------------------------------------------------------
+    def _simulation_kwargs(self, obj, settings) -> dict:
+        kwargs = dict(material=properties.build_material(settings), cells=settings.cells,
+                      seed=settings.seed, front=settings.front,
+                      threads=settings.threads or None)
+        for key in properties.MODEL_PARAMS:
+            kwargs[key] = getattr(settings, key)
+        self.shell = settings.crumple and core_supports("shell")
+        if core_supports("shell"):
+            kwargs["shell"] = self.shell
+        if self.shell:
+            kwargs["integrator"] = settings.integrator
+            kwargs["lattice"] = settings.lattice or None
+            self.dynamics = inputs.dynamics(self.scene, settings)
+            kwargs.update(self.dynamics)
+        if settings.pin_group:
+            if not core_supports("pinned"):
+                raise BakeError("this thinburn core cannot pin vertices yet: clear the Pin Group")
+            kwargs["pinned"] = inputs.pin_mask(obj, settings.pin_group)
+        floor = inputs.floor_height(self.scene, settings)
+        if floor is not None:
+            if not core_supports("floor"):
+                raise BakeError("this thinburn core has no floor yet: set Floor to None")
+            kwargs["floor"] = floor
+        return kwargs
+
+    # --- progress ----------------------------------------------------------------------------
+    @property
+    def progress(self) -> float:
+        return self.frames_done / len(self.frames)
+
+    @property
+    def current_frame(self) -> int:
+        return self.frames[min(self.frames_done, len(self.frames) - 1)]
+
+    # --- driving -----------------------------------------------------------------------------
+    def tick(self, budget_s: float = 0.05) -> bool:
+        """Sample ahead, hand frames to the worker, store what came back. True when finished."""
+        self._sample_ahead(_time.perf_counter() + budget_s)
+        self._drain(block=False)
+        return self.finished
+
+    def run(self) -> None:
+        """Bake to the end (background mode)."""
+        while not self.finished:
+            self._sample_ahead(_time.perf_counter() + 1.0)
+            self._drain(block=True)
+
+    def cancel(self) -> None:
+        """Stop now; the previous bake (file, modifier, attributes) stays as it was."""
+        self.worker.cancel()
+        self.worker.join(timeout=30.0)
+        self.writer.abort()
+        self._restore_frame()
+        self.finished = True
+
+    def _sample_ahead(self, deadline: float) -> None:
+        try:
+            self._sample_frames(deadline)
+        except BakeError as exc:
+            self._fail(str(exc))
+
+    def _sample_frames(self, deadline: float) -> None:
+        n = len(self.frames)
+        while self.next_task < n and self.next_task < self.frames_done + LOOKAHEAD:
+            need = min(self.next_task + 1, n - 1)
+            while self.next_sample <= need:
+                self.samples[self.next_sample] = inputs.sample_frame(
+                    self.scene, self.frames[self.next_sample], self.obj_name, self.igniters,
+                    self.winds)
+                self.next_sample += 1
+            self.worker.tasks.put(self._task(self.next_task))
+            self.samples.pop(self.next_task - 1, None)
+            self.next_task += 1
+            if _time.perf_counter() > deadline:
+                break
+
+    def _task(self, k: int) -> FrameTask:
+        last = k == len(self.frames) - 1
+        here = self.samples[k]
+        there = None if last else self.samples[k + 1]
+        ignitions = []
+        for i, start in enumerate(here.igniters):
+            end = None if there is None else there.igniters[i]
+            spacing = max(self.spacing, 0.5 * start[2])
+            ignitions += path_ignitions(start, end, k * self.dt, self.dt, spacing)
+        changed = {}
+        if self.shell:
+            changed = {key: v for key, v in here.dynamics.items() if self.dynamics.get(key) != v}
+            self.dynamics.update(changed)
+        return FrameTask(index=k, ignitions=ignitions, wind=here.wind, dynamics=changed,
+                         step=not last)
+
+    def _drain(self, block: bool) -> None:
+        while not self.finished:
+            try:
+                msg = self.worker.results.get(block=block, timeout=60.0 if block else None)
+            except queue.Empty:
+                if block and not self.worker.is_alive():
+                    self._fail("the bake thread stopped without a result")
+                return
+            kind = msg[0]
+            if kind == "frame":
+                _, index, positions, lit, particles = msg
+                self.writer.append(self._to_local(positions))
+                self.lit += lit
+                if particles is not None:
+                    self.particle_frames.append(particles)
+                self.frames_done = index + 1
+                if block and self.next_task < len(self.frames):
+                    return  # let run() sample more
+            elif kind == "done":
+                self._finish(msg[1], msg[2])
+            elif kind == "error":
+                self._fail(f"the simulation failed: {msg[1]}")
+
+    def _to_local(self, world: np.ndarray) -> np.ndarray:
+        inv = self.inverse
+        return world @ inv[:3, :3].T + inv[:3, 3]
+
+    def _fail(self, text: str) -> None:
+        self.cancel()
+        raise BakeError(text)
+
+    def _restore_frame(self) -> None:
+        if self.scene.frame_current != self.frame_restore:
+            self.scene.frame_set(self.frame_restore)
+
+    # --- results -----------------------------------------------------------------------------
+    def _finish(self, ignite_s: np.ndarray, burnout_s: np.ndarray) -> None:
+        self.worker.join(timeout=30.0)
+        obj = bpy.data.objects.get(self.obj_name)
+        if obj is None:
+            self._fail(f"the sheet '{self.obj_name}' was deleted during the bake")
+        self.writer.commit()
+        start = float(self.frames[0])
+        ignite = cache.seconds_to_frames(ignite_s, start, self.fps)
+        burnout = cache.seconds_to_frames(burnout_s, start, self.fps)
+        materials.apply_bake(obj, self.modifier_path, start, ignite, burnout)
+        if self.want_particles:
+            fire.apply_particles(obj, self.modifier_path, self.particle_frames, start)
+        obj.thinburn.baked_file = self.modifier_path
+        self._restore_frame()
+        self.finished = True
+        self.elapsed = _time.perf_counter() - self.started
+        ignited = int(np.count_nonzero(ignite < cache.NEVER_FRAME))
+        self.message = (f"ThinBurn: baked '{self.obj_name}' frames {self.frames[0]}–{self.frames[-1]} "
+                        f"in {self.elapsed:.1f} s; {ignited} of {self.n_vertices} vertices caught fire")
+        if ignited == 0:
+            self.message += " (no lit igniter touched the sheet)"

@@ -1,0 +1,258 @@
+"""What a bake adds to the sheet, all of it plain Blender data that renders without the add-on.
+
+* Modifier "ThinBurn Cache" (Mesh Cache, PC2), first in the stack: the baked motion.
+* Point attributes ``thinburn_ignite_time`` and ``thinburn_burnout_time``, in frames
+  (cache.NEVER_FRAME where a vertex never ignites).
+* Modifier "ThinBurn Burn" (geometry nodes, group "ThinBurn Burn"), right after the cache: it
+  writes the colour attribute ``thinburn_char`` for the current frame (viewport) and removes
+  faces whose vertices have all burnt out. The cache always sees the full mesh.
+* Shader node group "ThinBurn Char": char colour, a glowing ember edge and burn-through
+  (alpha) from the two time attributes and the frame (a driver, ``frame``, feeds it).
+"""
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+import bpy
+
+from . import cache
+from .fire import fire_object_name
+from .nodes import (ensure_modifier, interface_socket, link, map_range, new_group, node, set_input,
+                    socket, use_nodes)
+
+CACHE_MODIFIER = "ThinBurn Cache"
+BURN_MODIFIER = "ThinBurn Burn"
+BURN_GROUP = "ThinBurn Burn"
+CHAR_GROUP = "ThinBurn Char"
+ATTR_IGNITE = "thinburn_ignite_time"
+ATTR_BURNOUT = "thinburn_burnout_time"
+ATTR_CHAR = "thinburn_char"
+PAPER = (0.85, 0.80, 0.70, 1.0)
+CHAR = (0.02, 0.015, 0.01, 1.0)
+EMBER = (1.0, 0.35, 0.05, 1.0)
+EMBER_KELVIN = 1300.0
+CHAR_POINT = 0.4  # share of a cell's burn after which it looks fully charred
+
+
+# --- the shader group ----------------------------------------------------------------------------
+def char_group():
+    """Shader node group "ThinBurn Char" (created once, then reused)."""
+    tree, fresh = new_group(CHAR_GROUP, "ShaderNodeTree")
+    if not fresh:
+        return tree
+    interface_socket(tree, "Shader", "OUTPUT", "NodeSocketShader")
+    interface_socket(tree, "Char", "OUTPUT", "NodeSocketFloat", desc="0 unburnt .. 1 fully charred")
+    interface_socket(tree, "Ember", "OUTPUT", "NodeSocketFloat", desc="Glow weight of the ember edge")
+    interface_socket(tree, "Alpha", "OUTPUT", "NodeSocketFloat", desc="0 where burnt through")
+    interface_socket(tree, "Frame", "INPUT", "NodeSocketFloat", 1.0, desc="The scene frame (a driver: frame)")
+    interface_socket(tree, "Paper Color", "INPUT", "NodeSocketColor", PAPER, desc="Colour of the unburnt sheet")
+    interface_socket(tree, "Char Color", "INPUT", "NodeSocketColor", CHAR, desc="Colour of fully charred material")
+    interface_socket(tree, "Ember Strength", "INPUT", "NodeSocketFloat", 6.0, 0.0, 1000.0,
+        desc="Emission strength of the glowing edge")
+    interface_socket(tree, "Ember Width", "INPUT", "NodeSocketFloat", 0.3, 0.0, 1.0,
+        desc="Share of the burn, before burn-through, that glows")
+    interface_socket(tree, "Char Point", "INPUT", "NodeSocketFloat", CHAR_POINT, 0.01, 1.0,
+        desc="Share of the burn after which the material is fully charred")
+    interface_socket(tree, "Roughness", "INPUT", "NodeSocketFloat", 0.9, 0.0, 1.0)
+
+    gi = node(tree, "NodeGroupInput", -900, 0)
+    go = node(tree, "NodeGroupOutput", 700, 0)
+    ig = node(tree, "ShaderNodeAttribute", -900, 300, attribute_type="GEOMETRY", attribute_name=ATTR_IGNITE)
+    bo = node(tree, "ShaderNodeAttribute", -900, 150, attribute_type="GEOMETRY", attribute_name=ATTR_BURNOUT)
+    char = map_range(tree, -600, 300, (gi, "Frame"), (ig, "Fac"), (bo, "Fac"))
+    width_lo = node(tree, "ShaderNodeMath", -600, 0, operation="SUBTRACT")
+    width_lo.inputs[0].default_value = 1.0
+    tree.links.new(gi.outputs["Ember Width"], width_lo.inputs[1])
+    glow = map_range(tree, -400, 100, (char, "Result"), (width_lo, "Value"), 1.0, interp="SMOOTHSTEP")
+    alive = node(tree, "ShaderNodeMath", -600, -200, operation="LESS_THAN")
+    tree.links.new(gi.outputs["Frame"], alive.inputs[0])
+    tree.links.new(bo.outputs["Fac"], alive.inputs[1])
+    ember = node(tree, "ShaderNodeMath", -200, 0, operation="MULTIPLY")
+    tree.links.new(glow.outputs["Result"], ember.inputs[0])
+    tree.links.new(alive.outputs[0], ember.inputs[1])
+    dark = map_range(tree, -400, 400, (char, "Result"), 0.0, (gi, "Char Point"), interp="SMOOTHSTEP")
+    mix = node(tree, "ShaderNodeMix", -200, 300, data_type="RGBA")
+    link(tree, dark, "Result", mix, "Factor_Float")
+    link(tree, gi, "Paper Color", mix, "A_Color")
+    link(tree, gi, "Char Color", mix, "B_Color")
+    bsdf = node(tree, "ShaderNodeBsdfPrincipled", 50, 350)
+    link(tree, mix, "Result_Color", bsdf, "Base Color")
+    link(tree, gi, "Roughness", bsdf, "Roughness")
+    kelvin = node(tree, "ShaderNodeBlackbody", -200, -250)
+    set_input(kelvin, "Temperature", EMBER_KELVIN)
+    strength = node(tree, "ShaderNodeMath", 50, -100, operation="MULTIPLY")
+    tree.links.new(ember.outputs[0], strength.inputs[0])
+    tree.links.new(gi.outputs["Ember Strength"], strength.inputs[1])
+    emit = node(tree, "ShaderNodeEmission", 250, -100)
+    link(tree, kelvin, "Color", emit, "Color")
+    tree.links.new(strength.outputs[0], emit.inputs["Strength"])
+    add = node(tree, "ShaderNodeAddShader", 400, 150)
+    tree.links.new(bsdf.outputs[0], add.inputs[0])
+    tree.links.new(emit.outputs[0], add.inputs[1])
+    clear = node(tree, "ShaderNodeBsdfTransparent", 400, -150)
+    out = node(tree, "ShaderNodeMixShader", 550, 0)
+    tree.links.new(alive.outputs[0], out.inputs[0])
+    tree.links.new(clear.outputs[0], out.inputs[1])
+    tree.links.new(add.outputs[0], out.inputs[2])
+    tree.links.new(out.outputs[0], go.inputs["Shader"])
+    tree.links.new(char.outputs["Result"], go.inputs["Char"])
+    tree.links.new(ember.outputs[0], go.inputs["Ember"])
+    tree.links.new(alive.outputs[0], go.inputs["Alpha"])
+    return tree
+
+
+# --- the geometry-nodes group after the cache ---------------------------------------------------
+def burn_group():
+    """Geometry node group "ThinBurn Burn": viewport char colour and removal of burnt faces."""
+    tree, fresh = new_group(BURN_GROUP, "GeometryNodeTree")
+    if not fresh:
+        return tree
+    interface_socket(tree, "Geometry", "INPUT", "NodeSocketGeometry")
+    interface_socket(tree, "Remove Burnt", "INPUT", "NodeSocketBool", True,
+        desc="Delete faces whose vertices have all burnt out (burn-through in the viewport)")
+    interface_socket(tree, "Geometry", "OUTPUT", "NodeSocketGeometry")
+
+    gi = node(tree, "NodeGroupInput", -1000, 0)
+    go = node(tree, "NodeGroupOutput", 900, 0)
+    now = node(tree, "GeometryNodeInputSceneTime", -1000, 300)
+    ig = node(tree, "GeometryNodeInputNamedAttribute", -1000, 150, data_type="FLOAT")
+    set_input(ig, "Name", ATTR_IGNITE)
+    bo = node(tree, "GeometryNodeInputNamedAttribute", -1000, -150, data_type="FLOAT")
+    set_input(bo, "Name", ATTR_BURNOUT)
+    char = map_range(tree, -750, 300, (now, "Frame"), (ig, "Attribute"), (bo, "Attribute"))
+    glow = map_range(tree, -550, 100, (char, "Result"), 0.6, 1.0, interp="SMOOTHSTEP")
+    alive = node(tree, "FunctionNodeCompare", -750, -100, data_type="FLOAT", operation="LESS_THAN")
+    link(tree, now, "Frame", alive, "A")
+    link(tree, bo, "Attribute", alive, "B")
+    ember = node(tree, "ShaderNodeMath", -350, 100, operation="MULTIPLY")
+    tree.links.new(glow.outputs["Result"], ember.inputs[0])
+    tree.links.new(alive.outputs[0], ember.inputs[1])
+    dark = map_range(tree, -550, 400, (char, "Result"), 0.0, CHAR_POINT, interp="SMOOTHSTEP")
+    charred = node(tree, "ShaderNodeMix", -350, 350, data_type="RGBA")
+    link(tree, dark, "Result", charred, "Factor_Float")
+    set_input(charred, "A_Color", PAPER)
+    set_input(charred, "B_Color", CHAR)
+    colour = node(tree, "ShaderNodeMix", -150, 300, data_type="RGBA")
+    tree.links.new(ember.outputs[0], socket(colour.inputs, "Factor_Float"))
+    link(tree, charred, "Result_Color", colour, "A_Color")
+    set_input(colour, "B_Color", EMBER)
+    store = node(tree, "GeometryNodeStoreNamedAttribute", 100, 0, data_type="FLOAT_COLOR", domain="POINT")
+    set_input(store, "Name", ATTR_CHAR)
+    link(tree, gi, "Geometry", store, "Geometry")
+    link(tree, colour, "Result_Color", store, "Value")
+    # A face goes only when all its vertices burnt out: capture the test on points, then read
+    # it on faces (a boolean is true on a face when true on all its points).
+    burnt = node(tree, "FunctionNodeBooleanMath", -150, -150, operation="NOT")
+    tree.links.new(alive.outputs[0], burnt.inputs[0])
+    capture = node(tree, "GeometryNodeCaptureAttribute", 300, 0, domain="POINT")
+    capture.capture_items.new("BOOLEAN", "Burnt")
+    tree.links.new(store.outputs[0], capture.inputs[0])
+    tree.links.new(burnt.outputs[0], capture.inputs[1])
+    gate = node(tree, "FunctionNodeBooleanMath", 500, -150, operation="AND")
+    tree.links.new(capture.outputs[1], gate.inputs[0])
+    tree.links.new(gi.outputs["Remove Burnt"], gate.inputs[1])
+    delete = node(tree, "GeometryNodeDeleteGeometry", 700, 0, domain="FACE", mode="ONLY_FACE")
+    tree.links.new(capture.outputs[0], delete.inputs["Geometry"])
+    tree.links.new(gate.outputs[0], delete.inputs["Selection"])
+    tree.links.new(delete.outputs[0], go.inputs["Geometry"])
+    return tree
+
+
+# --- applying and freeing a bake ------------------------------------------------------------------
+def char_material(obj):
+    """A material "ThinBurn <sheet>" whose surface is the "ThinBurn Char" group."""
+    mat = bpy.data.materials.new(f"ThinBurn {obj.name}")
+    use_nodes(mat)
+    tree = mat.node_tree
+    tree.nodes.clear()
+    group = node(tree, "ShaderNodeGroup", 0, 0, node_tree=char_group())
+    group.name = CHAR_GROUP
+    out = node(tree, "ShaderNodeOutputMaterial", 300, 0)
+    tree.links.new(group.outputs["Shader"], out.inputs["Surface"])
+    fcurve = group.inputs["Frame"].driver_add("default_value")
+    fcurve.driver.type = "SCRIPTED"
+    fcurve.driver.expression = "frame"
+    if hasattr(mat, "surface_render_method"):
+        mat.surface_render_method = "DITHERED"
+    return mat
+
+
+def apply_bake(obj, pc2_path: str, frame_start: float, ignite, burnout) -> None:
+    """Hook a finished bake onto the sheet: attributes, modifiers, and a material if it has none."""
+    mesh = obj.data
+    cache.write_point_attribute(mesh, ATTR_IGNITE, ignite)
+    cache.write_point_attribute(mesh, ATTR_BURNOUT, burnout)
+    base = np.tile(np.asarray(PAPER, dtype=np.float32), (len(mesh.vertices), 1))
+    cache.write_point_attribute(mesh, ATTR_CHAR, base, "FLOAT_COLOR")
+    mesh.color_attributes.active_color = mesh.color_attributes[ATTR_CHAR]
+    mesh.color_attributes.render_color_index = mesh.color_attributes.active_color_index
+
+    md = ensure_modifier(obj, CACHE_MODIFIER, "MESH_CACHE", 0)
+    md.cache_format = "PC2"
+    md.filepath = pc2_path
+    md.frame_start = frame_start  # PC2 sample 0 is this frame
+    md.frame_scale = 1.0
+    md.play_mode = "SCENE"
+    md.time_mode = "FRAME"
+    md.interpolation = "LINEAR"
+    md.deform_mode = "OVERWRITE"
+    md.forward_axis, md.up_axis = "POS_Y", "POS_Z"
+    burn = ensure_modifier(obj, BURN_MODIFIER, "NODES", 1)
+    burn.node_group = burn_group()
+
+    if not any(slot.material for slot in obj.material_slots):
+        mat = char_material(obj)
+        if obj.material_slots:
+            obj.material_slots[0].material = mat
+        else:
+            obj.data.materials.append(mat)
+    obj.update_tag()
+    mesh.update()
+
+
+def free_bake(obj) -> list:
+    """Remove what apply_bake added (and the cache files); returns what went, for the report."""
+    gone = []
+    md = obj.modifiers.get(CACHE_MODIFIER)
+    paths = set()
+    if obj.thinburn.baked_file:
+        paths.add(bpy.path.abspath(obj.thinburn.baked_file))
+    if md is not None:
+        if md.filepath:
+            paths.add(bpy.path.abspath(md.filepath))
+        obj.modifiers.remove(md)
+        gone.append("modifier " + CACHE_MODIFIER)
+    md = obj.modifiers.get(BURN_MODIFIER)
+    if md is not None:
+        obj.modifiers.remove(md)
+        gone.append("modifier " + BURN_MODIFIER)
+    if cache.remove_attributes(obj.data, (ATTR_IGNITE, ATTR_BURNOUT, ATTR_CHAR)):
+        gone.append("attributes")
+    for i, slot in enumerate(obj.material_slots):
+        mat = slot.material
+        if mat is not None and mat.name == f"ThinBurn {obj.name}":
+            obj.data.materials.pop(index=i)
+            if mat.users == 0:
+                bpy.data.materials.remove(mat)
+            gone.append("material")
+            break
+    fire = bpy.data.objects.get(fire_object_name(obj))
+    if fire is not None:
+        fmd = fire.modifiers.get(CACHE_MODIFIER)
+        if fmd is not None and fmd.filepath:
+            paths.add(bpy.path.abspath(fmd.filepath))
+        mesh = fire.data
+        bpy.data.objects.remove(fire)
+        if mesh is not None and mesh.users == 0:
+            bpy.data.meshes.remove(mesh)
+        gone.append("fire particles")
+    for path in sorted(paths):
+        for p in (path, path + ".partial"):
+            if os.path.exists(p):
+                os.remove(p)
+                gone.append("file " + os.path.basename(p))
+    obj.thinburn.baked_file = ""
+    obj.update_tag()
+    return gone

@@ -1,0 +1,172 @@
+"""Panels: Physics > ThinBurn for a sheet, Object > ThinBurn Igniter for an igniter.
+
+Panels only poll and draw; everything they show is a property or an operator.
+"""
+from __future__ import annotations
+
+import bpy
+
+from . import job, materials
+from .operators import running_job
+from .properties import DYNAMIC_PARAMS, MATERIAL_FIELDS, MODEL_PARAMS
+
+
+class ThinBurnPhysicsPanel:
+    bl_space_type = "PROPERTIES"
+    bl_region_type = "WINDOW"
+    bl_context = "physics"
+
+    @classmethod
+    def poll(cls, context):
+        obj = context.object
+        return obj is not None and obj.type == "MESH"
+
+
+class PHYSICS_PT_thinburn(ThinBurnPhysicsPanel, bpy.types.Panel):
+    bl_label = "ThinBurn"
+
+    def draw_header(self, context):
+        self.layout.prop(context.object.thinburn, "enabled", text="")
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        settings = context.object.thinburn
+        layout.active = settings.enabled
+        layout.prop(settings, "material")
+        col = layout.column(align=True)
+        col.prop(settings, "cells")
+        row = col.row()
+        row.active = settings.crumple and job.core_supports("lattice")
+        row.prop(settings, "lattice")
+        layout.prop(settings, "crumple")
+        layout.prop(settings, "igniter_collection")
+        layout.prop(settings, "wind_scale")
+
+
+class PHYSICS_PT_thinburn_motion(ThinBurnPhysicsPanel, bpy.types.Panel):
+    bl_label = "Motion"
+    bl_parent_id = "PHYSICS_PT_thinburn"
+    bl_options = {"DEFAULT_CLOSED"}
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        settings = context.object.thinburn
+        layout.active = settings.enabled and settings.crumple
+        layout.prop(settings, "integrator")
+        for key in DYNAMIC_PARAMS:
+            layout.prop(settings, key)
+        layout.label(text="Gravity: the scene's (Scene > Gravity)", icon="INFO")
+
+
+class PHYSICS_PT_thinburn_hold(ThinBurnPhysicsPanel, bpy.types.Panel):
+    bl_label = "Pins and Floor"
+    bl_parent_id = "PHYSICS_PT_thinburn"
+    bl_options = {"DEFAULT_CLOSED"}
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        obj = context.object
+        settings = obj.thinburn
+        layout.active = settings.enabled
+        row = layout.row()
+        row.active = job.core_supports("pinned")
+        row.prop_search(settings, "pin_group", obj, "vertex_groups")
+        col = layout.column()
+        col.active = job.core_supports("floor")
+        col.prop(settings, "floor_mode")
+        if settings.floor_mode == "HEIGHT":
+            col.prop(settings, "floor_height")
+        elif settings.floor_mode == "OBJECT":
+            col.prop(settings, "floor_object")
+
+
+class PHYSICS_PT_thinburn_cache(ThinBurnPhysicsPanel, bpy.types.Panel):
+    bl_label = "Bake"
+    bl_parent_id = "PHYSICS_PT_thinburn"
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        obj = context.object
+        settings = obj.thinburn
+        layout.active = settings.enabled
+        col = layout.column(align=True)
+        col.prop(settings, "frame_start")
+        col.prop(settings, "frame_end")
+        layout.prop(settings, "cache_dir")
+        running = running_job(context.scene)
+        if running is not None:
+            layout.progress(factor=running.progress, type="BAR",
+                            text=f"Frame {running.current_frame} / {running.frames[-1]} (Esc cancels)")
+        row = layout.row(align=True)
+        row.operator("thinburn.bake", icon="RENDER_ANIMATION")
+        row.operator("thinburn.free_bake", text="Free", icon="TRASH")
+        if settings.baked_file and obj.modifiers.get(materials.CACHE_MODIFIER):
+            layout.label(text=f"Baked: {settings.baked_file}", icon="CHECKMARK")
+
+
+class PHYSICS_PT_thinburn_advanced(ThinBurnPhysicsPanel, bpy.types.Panel):
+    bl_label = "Advanced"
+    bl_parent_id = "PHYSICS_PT_thinburn"
+    bl_options = {"DEFAULT_CLOSED"}
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        settings = context.object.thinburn
+        layout.active = settings.enabled
+        layout.prop(settings, "front")
+        layout.prop(settings, "seed")
+        layout.prop(settings, "threads")
+        box = layout.column(heading="Material")
+        for field in MATERIAL_FIELDS:
+            box.prop(settings, "mat_" + field)
+        layout.operator("thinburn.load_preset", icon="LOOP_BACK")
+        col = layout.column(heading="Model")
+        for key in MODEL_PARAMS:
+            col.prop(settings, key)
+
+
+class OBJECT_PT_thinburn_igniter(bpy.types.Panel):
+    bl_label = "ThinBurn Igniter"
+    bl_space_type = "PROPERTIES"
+    bl_region_type = "WINDOW"
+    bl_context = "object"
+
+    @classmethod
+    def poll(cls, context):
+        obj = context.object
+        if obj is None:
+            return False
+        if obj.type == "EMPTY":
+            return True
+        for sheet in context.scene.objects:
+            coll = sheet.thinburn.igniter_collection if sheet.type == "MESH" else None
+            if coll is not None and obj.name in coll.all_objects:
+                return True
+        return False
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        igniter = context.object.thinburn_igniter
+        layout.prop(igniter, "strength")
+        layout.prop(igniter, "radius")
+
+
+CLASSES = (PHYSICS_PT_thinburn, PHYSICS_PT_thinburn_motion, PHYSICS_PT_thinburn_hold,
+           PHYSICS_PT_thinburn_cache,
+           PHYSICS_PT_thinburn_advanced, OBJECT_PT_thinburn_igniter)
+
+
+def register():
+    for cls in CLASSES:
+        bpy.utils.register_class(cls)
+
+
+def unregister():
+    for cls in reversed(CLASSES):
+        bpy.utils.unregister_class(cls)

@@ -1,0 +1,208 @@
+"""Settings stored on objects: ``obj.thinburn`` (a sheet) and ``obj.thinburn_igniter``.
+
+Only properties that the bake reads frame by frame are animatable (igniter strength, radius
+and transform, the wind scale); the rest are read once at the bake's first frame and are
+not offered for keyframing, so the UI never suggests an animation the bake would ignore.
+"""
+import bpy
+import thinburn
+from bpy.props import (BoolProperty, EnumProperty, FloatProperty, IntProperty, PointerProperty,
+                       StringProperty)
+
+STATIC = set()  # options=STATIC: not animatable (read once per bake)
+# Blender 4.5+ warns about '//' in path properties that do not declare they accept it.
+RELATIVE_PATH = {"PATH_SUPPORTS_BLEND_RELATIVE"} if bpy.app.version >= (4, 5, 0) else set()
+
+# Material fields the panel exposes (thinburn.Material), with their UI text.
+MATERIAL_FIELDS = {
+    "mass": ("Mass", "Areal density in Table 1's unit of 0.1 kg/m² (paper 0.45 = 45 g/m²)", 0.001, 100.0),
+    "V0": ("Spread Speed", "Speed of the fire front on a flat, level sheet, mm/s (Table 1, V0 of eq. 1)", 0.001, 1000.0),
+    "Cv": ("Slope Factor", "How much a curved or tilted sheet slows the front: V = V0·(1 − Cv·grad²) (eq. 1)", 0.0, 10.0),
+    "burn_duration": ("Burn Duration", "Seconds a cell keeps burning after the front reaches it", 0.01, 600.0),
+    "speed_noise": ("Speed Noise", "Random per-cell jitter of the spread speed, relative; breaks up grid-aligned fronts", 0.0, 0.9),
+    "duration_noise": ("Duration Noise", "Random per-cell jitter of the burn duration, relative", 0.0, 0.9),
+    "ash_fraction": ("Ash Fraction", "Share of its mass a burnt cell keeps as ash", 0.0, 1.0),
+    "Cp": ("Pyrolysis", "How strongly burning material shrinks (Table 1, Cp of eq. 3)", 0.0, 100.0),
+    "C_damping": ("Damping", "Damping of the sheet's motion (Table 1, eq. 12)", 0.0, 100.0),
+    "K_structure": ("Structure Stiffness", "Stiffness of the lattice's stretch springs (Table 1)", 0.0, 100.0),
+    "K_shear": ("Shear Stiffness", "Stiffness of the lattice's shear springs (Table 1)", 0.0, 100.0),
+    "K_flex": ("Flexion Stiffness", "Stiffness of the lattice's bending springs (Table 1)", 0.0, 100.0),
+}
+
+# Motion parameters read every frame (keyframeable) and passed to Simulation.set_dynamics
+# when they change; defaults equal the core's (a test checks). Gravity comes from the scene.
+DYNAMIC_PARAMS = {
+    "buoyancy": ("Buoyancy", "Lift of hot material: N/kg per unit of heat, along world +Z", 1.0, 0.0, 100.0),
+    "wind_drag": ("Wind Drag", "How hard the wind pushes on the sheet, Pa·s/m (force per area per m/s of relative wind)", 1.0, 0.0, 100.0),
+    "friction": ("Friction", "Coulomb friction of the sheet on the floor", 0.5, 0.0, 10.0),
+    "crumple_gain": ("Crumple Gain", "Multiplies how much the burn's bending turns into crumpling motion", 1.0, 0.0, 10.0),
+}
+
+# Model scalars passed as Simulation(**params); defaults equal the core's (a test checks).
+MODEL_PARAMS = {
+    "v_floor": ("Speed Floor", "Lowest spread speed as a fraction of V0, so steep folds still burn", 0.05, 0.001, 1.0),
+    "climb": ("Climb", "How much faster flames run uphill along the sheet; 0 is the paper's symmetric spread", 0.0, 0.0, 0.9),
+    "wind_spread": ("Wind Spread", "Extra push on the front per m/s of wind along the sheet", 0.0, 0.0, 100.0),
+    "max_drive": ("Max Drive", "Cap on the directional push (climb and wind), so the back of the fire never stalls", 0.9, 0.0, 0.95),
+}
+
+
+def _describe(name: str, m) -> str:
+    fig = f", the paper's figure {m.figure}" if getattr(m, "figure", 0) else ""
+    return (f"Table 1 preset '{name}'{fig}: mass {m.mass}, V0 {m.V0} mm/s, Cp {m.Cp}, "
+            f"damping {m.C_damping}, stiffness {m.K_structure}/{m.K_shear}/{m.K_flex}")
+
+
+_MATERIAL_ITEMS = [(name, name.replace("_", " ").title(), _describe(name, m), i)
+                   for i, (name, m) in enumerate(thinburn.MATERIALS.items())]
+
+
+def load_preset(settings, name: str) -> None:
+    """Copy a Table 1 preset into the sheet's material fields."""
+    preset = thinburn.MATERIALS[name]
+    for field in MATERIAL_FIELDS:
+        if hasattr(preset, field):
+            setattr(settings, "mat_" + field, getattr(preset, field))
+
+
+def _on_material(self, context):
+    load_preset(self, self.material)
+
+
+def build_material(settings):
+    """The thinburn.Material the bake uses: the preset with the panel's field values."""
+    preset = thinburn.MATERIALS[settings.material]
+    changes = {f: getattr(settings, "mat_" + f) for f in MATERIAL_FIELDS if hasattr(preset, f)}
+    return preset.with_(**changes)
+
+
+def _field_props():
+    props = {}
+    default = thinburn.MATERIALS["paper"]
+    for field, (label, desc, lo, hi) in MATERIAL_FIELDS.items():
+        props["mat_" + field] = FloatProperty(
+            name=label, description=desc, default=float(getattr(default, field, lo)),
+            min=lo, soft_max=hi, options=STATIC)
+    for key, (label, desc, value, lo, hi) in MODEL_PARAMS.items():
+        props[key] = FloatProperty(name=label, description=desc, default=value, min=lo, max=hi,
+                                   options=STATIC)
+    for key, (label, desc, value, lo, hi) in DYNAMIC_PARAMS.items():
+        props[key] = FloatProperty(name=label, description=desc + "; read every frame",
+                                   default=value, min=lo, soft_max=hi)
+    return props
+
+
+class ThinBurnSettings(bpy.types.PropertyGroup):
+    """A burning sheet: what the Physics panel edits and the bake reads."""
+
+    enabled: BoolProperty(
+        name="ThinBurn", default=False, options=STATIC,
+        description="Burn this mesh as a thin sheet with ThinBurn")
+    material: EnumProperty(
+        name="Material", items=_MATERIAL_ITEMS, default="paper", update=_on_material, options=STATIC,
+        description="Table 1 preset of Liu et al. 2009; choosing one loads its values into the "
+                    "Material fields under Advanced")
+    cells: IntProperty(
+        name="Cells", default=128, min=8, max=1024, soft_max=512, options=STATIC,
+        description="The sheet is divided into Cells × Cells fire cells (the paper uses 128). "
+                    "More cells give finer fronts and cost more")
+    lattice: IntProperty(
+        name="Lattice", default=0, min=0, max=257, soft_max=64, options=STATIC,
+        description="Resolution of the lattice that carries the sheet's motion, Lattice × Lattice "
+                    "couples; 0 chooses it from the sheet's size and the cells")
+    crumple: BoolProperty(
+        name="Crumple", default=True, options=STATIC,
+        description="Simulate the sheet's motion (paper §4: heat, bending, gravity, wind, fire "
+                    "particles). Off: only the fire runs and the sheet keeps its rest shape")
+    integrator: EnumProperty(
+        name="Integrator", default="implicit", options=STATIC,
+        description="Time integration of the sheet's motion",
+        items=[("implicit", "Implicit", "Backward Euler: stable at frame-sized steps (default)", 0),
+               ("symplectic", "Symplectic", "Symplectic Euler, substepped as stability needs", 1),
+               ("explicit", "Explicit", "The paper's explicit scheme (eqs 13-15), substepped as stability needs", 2)])
+    threads: IntProperty(
+        name="Threads", default=0, min=0, max=1024, options=STATIC,
+        description="Threads of the simulation core; 0 uses every core. The result is the same "
+                    "for any count")
+    seed: IntProperty(
+        name="Seed", default=0, min=0, options=STATIC,
+        description="Seeds the random jitter; the same settings and seed bake the same result")
+    front: EnumProperty(
+        name="Front", default="fmm", options=STATIC,
+        description="How the fire front is advanced over the cells",
+        items=[("fmm", "Fast Marching", "Second-order fast marching: smooth, converging fronts (default)", 0),
+               ("fmm1", "Fast Marching (1st order)", "First-order fast marching", 1),
+               ("cellular", "Cellular", "The paper's 8-neighbour cellular rule", 2),
+               ("cellular16", "Cellular 16", "A 16-neighbour cellular rule: rounder fronts", 3)])
+
+    igniter_collection: PointerProperty(
+        name="Igniters", type=bpy.types.Collection, options=STATIC,
+        description="Objects in this collection (usually Empties) light the sheet where their "
+                    "ThinBurn Igniter strength is above 0; cells within the igniter's radius catch fire")
+    wind_scale: FloatProperty(
+        name="Wind Scale", default=1.0, min=0.0, soft_max=10.0,
+        description="Wind speed in m/s per unit of a Wind force field's strength. The scene's Wind "
+                    "fields blow along their object's Z axis; read every frame")
+
+    pin_group: StringProperty(
+        name="Pin Group", default="", options=STATIC,
+        description="Vertex group whose vertices (weight above 0.5) are held in place")
+    floor_mode: EnumProperty(
+        name="Floor", default="NONE", options=STATIC,
+        description="A horizontal floor the sheet cannot fall through",
+        items=[("NONE", "None", "No floor", 0),
+               ("HEIGHT", "Height", "A floor at a fixed world height", 1),
+               ("OBJECT", "Object", "A floor at the world height of an object's origin (e.g. a plane)", 2)])
+    floor_height: FloatProperty(
+        name="Floor Height", default=0.0, subtype="DISTANCE", unit="LENGTH", options=STATIC,
+        description="World height (Z) of the floor")
+    floor_object: PointerProperty(
+        name="Floor Object", type=bpy.types.Object, options=STATIC,
+        description="The floor lies at this object's world Z at the first frame")
+
+    frame_start: IntProperty(
+        name="Start", default=1, min=0, options=STATIC,
+        description="First frame of the bake; the sheet is at rest here")
+    frame_end: IntProperty(
+        name="End", default=250, min=0, options=STATIC,
+        description="Last frame of the bake")
+    cache_dir: StringProperty(
+        name="Cache Folder", default="//thinburn_cache/", subtype="DIR_PATH", options=RELATIVE_PATH,
+        description="Folder of the bake's PC2 file; '//' means next to the .blend file")
+
+    show_advanced: BoolProperty(name="Advanced", default=False, options=STATIC,
+                                description="Show the material and model parameters")
+    baked_file: StringProperty(
+        name="Baked File", default="", options=STATIC,
+        description="The PC2 file of the current bake (set by the bake, cleared by Free Bake)")
+
+    __annotations__.update(_field_props())
+
+
+class ThinBurnIgniter(bpy.types.PropertyGroup):
+    """An object that sets a sheet alight."""
+
+    strength: FloatProperty(
+        name="Strength", default=1.0, min=0.0, soft_max=1.0,
+        description="Above 0 the igniter is lit: cells within its radius catch fire at that "
+                    "frame. Keyframe it to light the sheet at a chosen time")
+    radius: FloatProperty(
+        name="Radius", default=0.02, min=0.0, soft_max=1.0, subtype="DISTANCE", unit="LENGTH",
+        description="Cells within this distance of the igniter catch fire (0: the nearest cell)")
+
+
+CLASSES = (ThinBurnSettings, ThinBurnIgniter)
+
+
+def register():
+    for cls in CLASSES:
+        bpy.utils.register_class(cls)
+    bpy.types.Object.thinburn = PointerProperty(type=ThinBurnSettings)
+    bpy.types.Object.thinburn_igniter = PointerProperty(type=ThinBurnIgniter)
+
+
+def unregister():
+    del bpy.types.Object.thinburn_igniter
+    del bpy.types.Object.thinburn
+    for cls in reversed(CLASSES):
+        bpy.utils.unregister_class(cls)

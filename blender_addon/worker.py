@@ -1,0 +1,109 @@
+"""The bake's worker thread: it drives the thinburn core and nothing else.
+
+No bpy here. The main thread reads the scene, turns each frame into a ``FrameTask`` (its
+ignitions and wind, plain numbers) and queues it; the worker runs the core's ``ignite``,
+``step`` and array copies with the GIL released inside the core, and queues the results.
+"""
+from __future__ import annotations
+
+import math
+import queue
+import threading
+from dataclasses import dataclass, field
+
+import numpy as np
+
+MAX_PATH_SAMPLES = 64  # per igniter and frame: bounds the work of a fast-moving igniter
+
+
+@dataclass
+class FrameTask:
+    """One frame for the worker: light these points, record the state, then step."""
+
+    index: int                      # 0 for the bake's first frame
+    ignitions: list = field(default_factory=list)  # (point (3,), time s, radius m)
+    wind: tuple = (0.0, 0.0, 0.0)   # m/s, blowing during the step that follows
+    dynamics: dict = field(default_factory=dict)  # motion parameters that changed
+    step: bool = True               # False on the last frame
+
+
+def path_ignitions(start, end, t0: float, dt: float, spacing: float) -> list:
+    """Ignitions along an igniter's straight path over one frame: (point, time, radius).
+
+    ``start`` and ``end`` are (position, strength, radius) at this frame and the next (``end``
+    None on the last frame). The igniter lights its position at t0; if it is still lit at the
+    next frame, it also lights points along the way, at most ``spacing`` apart (or
+    MAX_PATH_SAMPLES of them), at times interpolated in [t0, t0 + dt).
+    """
+    pos, strength, radius = start
+    if strength <= 0.0:
+        return []
+    p0 = np.asarray(pos, dtype=np.float64)
+    out = [(p0, t0, float(radius))]
+    if end is None or end[1] <= 0.0:
+        return out
+    p1 = np.asarray(end[0], dtype=np.float64)
+    r1 = float(end[2])
+    dist = float(np.linalg.norm(p1 - p0))
+    k = min(MAX_PATH_SAMPLES, math.ceil(dist / spacing)) if spacing > 0 else 1
+    for j in range(1, k):
+        s = j / k
+        out.append((p0 + s * (p1 - p0), t0 + s * dt, radius + s * (r1 - radius)))
+    return out
+
+
+class CoreWorker(threading.Thread):
+    """Builds the Simulation, then runs the queued FrameTasks in order.
+
+    Messages on ``results`` (tuples): ("frame", index, positions, lit, particles or None),
+    ("done", ignition_times, burnout_times), ("error", text), ("cancelled",).
+    """
+
+    def __init__(self, make_simulation, dt: float, want_particles: bool):
+        super().__init__(name="thinburn-bake", daemon=True)
+        self._make_simulation = make_simulation
+        self._dt = float(dt)
+        self._want_particles = want_particles
+        self.tasks: queue.Queue = queue.Queue()
+        self.results: queue.Queue = queue.Queue()
+        self._cancel = threading.Event()
+
+    def cancel(self) -> None:
+        self._cancel.set()
+        self.tasks.put(None)  # wake a worker that waits for a task
+
+    def run(self) -> None:
+        try:
+            sim = self._make_simulation()
+            while not self._cancel.is_set():
+                task = self.tasks.get()
+                if task is None or self._cancel.is_set():
+                    break
+                self.results.put(self._run_task(sim, task))
+                if not task.step:
+                    self.results.put(("done", np.array(sim.vertex_ignition_times(), copy=True),
+                                      np.array(sim.vertex_burnout_times(), copy=True)))
+                    return
+            self.results.put(("cancelled",))
+        except Exception as exc:  # reported on the main thread, never swallowed
+            self.results.put(("error", f"{type(exc).__name__}: {exc}"))
+
+    def _run_task(self, sim, task: FrameTask):
+        lit = 0
+        for point, time, radius in task.ignitions:
+            try:
+                lit += sim.ignite(point, time=time, radius=radius)
+            except ValueError:
+                pass  # the igniter is off the sheet: it lights nothing (counted as lit == 0)
+        positions = np.array(sim.vertex_positions(), dtype=np.float64, copy=True)
+        particles = None
+        if self._want_particles:
+            pts, temps = sim.particles()
+            particles = (np.array(pts, dtype=np.float32, copy=True),
+                         np.array(temps, dtype=np.float32, copy=True))
+        if task.step:
+            sim.wind = task.wind
+            if task.dynamics:
+                sim.set_dynamics(**task.dynamics)
+            sim.step(self._dt)
+        return ("frame", task.index, positions, lit, particles)

@@ -1,0 +1,166 @@
+"""Registration, the properties' contract with the core, and the fire-particle output."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+bpy = pytest.importorskip("bpy")
+pytestmark = pytest.mark.blender
+
+from blender_helpers import ROOT, make_sheet  # noqa: E402
+
+
+def test_registers_properties_operators_and_panels(addon):
+    import thinburn
+    obj = make_sheet()
+    for name in ("material", "igniter_collection", "frame_start", "frame_end", "cache_dir",
+                 "pin_group", "cells", "lattice", "enabled", "floor_mode"):
+        assert hasattr(obj.thinburn, name), name
+    assert hasattr(obj.thinburn_igniter, "strength") and hasattr(obj.thinburn_igniter, "radius")
+    assert hasattr(bpy.ops.thinburn, "bake") and hasattr(bpy.ops.thinburn, "free_bake")
+    assert hasattr(bpy.types, "PHYSICS_PT_thinburn")
+    items = obj.thinburn.bl_rna.properties["material"].enum_items.keys()
+    assert list(items) == list(thinburn.MATERIALS)
+    assert obj.thinburn.cache_dir == "//thinburn_cache/"
+
+
+def test_every_property_has_a_real_description(addon):
+    for group in (addon.properties.ThinBurnSettings, addon.properties.ThinBurnIgniter):
+        for prop in group.bl_rna.properties:
+            if prop.identifier in {"rna_type", "name"}:
+                continue
+            assert len(prop.description) > 20, f"{group.__name__}.{prop.identifier}"
+
+
+def test_only_per_frame_inputs_are_animatable(addon):
+    props = addon.properties.ThinBurnSettings.bl_rna.properties
+    animatable = {p.identifier for p in props if p.is_animatable and p.identifier != "rna_type"}
+    assert animatable - {"name"} == {"wind_scale", *addon.properties.DYNAMIC_PARAMS}
+    ig = addon.properties.ThinBurnIgniter.bl_rna.properties
+    assert ig["strength"].is_animatable and ig["radius"].is_animatable
+
+
+def test_material_preset_fills_the_fields_and_reaches_the_core(addon):
+    import thinburn
+    obj = make_sheet()
+    obj.thinburn.material = "cloth"
+    cloth = thinburn.MATERIALS["cloth"]
+    assert obj.thinburn.mat_V0 == pytest.approx(cloth.V0)
+    assert obj.thinburn.mat_burn_duration == pytest.approx(cloth.burn_duration)
+    obj.thinburn.mat_V0 = 7.0
+    built = addon.properties.build_material(obj.thinburn)
+    assert built.V0 == pytest.approx(7.0) and built.K_flex == pytest.approx(cloth.K_flex)
+
+
+def test_model_parameter_defaults_match_the_core(addon):
+    import thinburn
+    verts = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]], dtype=float)
+    sim = thinburn.Simulation(verts, [[0, 1, 2], [1, 3, 2]], cells=8)
+    obj = make_sheet()
+    for key in addon.properties.MODEL_PARAMS:
+        assert getattr(obj.thinburn, key) == pytest.approx(getattr(sim.params, key)), key
+    for key in addon.properties.DYNAMIC_PARAMS:
+        assert getattr(obj.thinburn, key) == pytest.approx(sim.params.dynamics[key]), key
+    assert obj.thinburn.integrator == sim.params.dynamics["integrator"]
+
+
+def test_manifest_and_bl_info(addon):
+    import tomllib
+    manifest = tomllib.loads((ROOT / "blender_addon" / "blender_manifest.toml").read_text())
+    assert manifest["id"] == "thinburn" and manifest["type"] == "add-on"
+    assert tuple(int(x) for x in manifest["blender_version_min"].split(".")) >= (4, 2, 0)
+    assert addon.bl_info["blender"] >= (4, 2, 0)
+    assert callable(addon.register) and callable(addon.unregister)
+
+
+def test_fire_particles_become_an_emitting_point_cloud(addon, tmp_path):
+    """The output path for thinburn.Simulation.particles, fed with known particles."""
+    sheet = make_sheet()
+    rng = np.random.default_rng(1)
+    frames = []
+    for k in (3, 0, 5):  # K above ambient; below 150 K a particle is left out
+        frames.append((rng.uniform(-0.1, 0.1, size=(k, 3)).astype(np.float32),
+                       np.linspace(100.0, 900.0, k, dtype=np.float32)))
+    pc2 = str(tmp_path / "Sheet.pc2")
+    addon.fire.apply_particles(sheet, pc2, frames, frame_start=1.0)
+    fire = bpy.data.objects["ThinBurn Fire Sheet"]
+    head, data = addon.cache.read_pc2(tmp_path / "Sheet_fire.pc2")
+    assert head["points"] == 10 and head["samples"] == 3
+    for frame, (pos, temp) in enumerate(frames, start=1):
+        glowing = temp >= 150.0
+        pos, temp = pos[glowing], temp[glowing]
+        bpy.context.scene.frame_set(frame)
+        dg = bpy.context.evaluated_depsgraph_get()
+        geo = bpy.types.GeometrySet.from_evaluated_object(fire.evaluated_get(dg))
+        cloud = geo.pointcloud
+        count = 0 if cloud is None else len(cloud.points)
+        assert count == len(temp)
+        if count:
+            got_t = np.empty(count, dtype=np.float32)
+            cloud.attributes["temperature"].data.foreach_get("value", got_t)
+            got_p = np.empty(3 * count, dtype=np.float32)
+            cloud.attributes["position"].data.foreach_get("vector", got_p)
+            np.testing.assert_allclose(got_t, temp, rtol=1e-6)
+            np.testing.assert_allclose(got_p.reshape(-1, 3), pos, atol=1e-6)
+            assert cloud.materials[0].name == "ThinBurn Fire"
+    assert addon.materials.free_bake(sheet)  # the fire object and its file go with the bake
+    assert "ThinBurn Fire Sheet" not in bpy.data.objects
+    assert not (tmp_path / "Sheet_fire.pc2").exists()
+
+
+class _Layout:
+    """Stands in for UILayout: records what a panel draws and checks each property exists."""
+
+    def __init__(self, log):
+        self.log = log
+
+    def _sub(self, *args, **kwargs):
+        return _Layout(self.log)
+
+    row = column = box = split = _sub
+
+    def prop(self, data, name, **kwargs):
+        assert name in data.bl_rna.properties, f"panel draws a missing property {name!r}"
+        self.log.append(name)
+
+    def prop_search(self, data, name, search_data, search_name, **kwargs):
+        assert name in data.bl_rna.properties and search_name in search_data.bl_rna.properties
+        self.log.append(name)
+
+    def operator(self, idname, **kwargs):
+        category, op = idname.split(".")
+        assert hasattr(getattr(bpy.ops, category), op), idname
+        self.log.append(idname)
+
+    def label(self, **kwargs):
+        pass
+
+    def progress(self, **kwargs):
+        pass
+
+
+class _Context:
+    def __init__(self, obj):
+        self.object = obj
+        self.active_object = obj
+        self.scene = bpy.context.scene
+
+
+def test_panels_draw_existing_properties_and_operators(addon):
+    sheet = make_sheet()
+    empty = bpy.data.objects.new("Igniter", None)
+    bpy.context.scene.collection.objects.link(empty)
+    drawn = []
+    for obj in (sheet, empty):
+        ctx = _Context(obj)
+        for cls in addon.panels.CLASSES:
+            if not cls.poll(ctx):
+                continue
+            fake = type("P", (), {"layout": _Layout(drawn)})()
+            if hasattr(cls, "draw_header"):
+                cls.draw_header(fake, ctx)
+            cls.draw(fake, ctx)
+    for name in ("enabled", "material", "cells", "lattice", "igniter_collection", "pin_group",
+                 "frame_start", "frame_end", "cache_dir", "thinburn.bake", "thinburn.free_bake",
+                 "mat_V0", "v_floor", "strength", "radius"):
+        assert name in drawn, name

@@ -1,0 +1,311 @@
+"""Baking in real Blender: the cache, the modifier, the attributes, cancel, free, reload."""
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import pytest
+
+bpy = pytest.importorskip("bpy")
+pytestmark = pytest.mark.blender
+
+from blender_helpers import (evaluated_positions, make_igniter, make_sheet,  # noqa: E402
+                             point_attribute, setup_bake)
+
+FRAMES = 30
+LIT_FROM = 8
+
+
+@pytest.fixture
+def baked(addon, tmp_path):
+    """A 9×9 sheet with an igniter at a corner lit from frame LIT_FROM, baked."""
+    sheet = make_sheet()
+    setup_bake(sheet, frames=FRAMES, cache_dir=tmp_path / "cache")
+    make_igniter(sheet, (-0.1, -0.1, 0.5), lit_from=LIT_FROM)
+    assert bpy.ops.thinburn.bake() == {"FINISHED"}
+    return sheet
+
+
+def test_pc2_file_matches_the_mesh_and_frames(addon, baked, tmp_path):
+    cache = addon.cache
+    path = tmp_path / "cache" / "Sheet.pc2"
+    head, data = cache.read_pc2(path)
+    assert head["points"] == len(baked.data.vertices) == 81
+    assert head["samples"] == FRAMES
+    assert head["start_frame"] == 1.0 and head["sample_rate"] == 1.0 and head["version"] == 1
+    assert not (tmp_path / "cache" / "Sheet.pc2.partial").exists()
+    rest = np.array([v.co for v in baked.data.vertices], dtype=np.float32)
+    np.testing.assert_allclose(data[0], rest, atol=1e-6)  # the first frame is the rest mesh
+
+
+def test_modifier_plays_the_cache(addon, baked, tmp_path):
+    md = baked.modifiers[0]
+    assert md.name == "ThinBurn Cache" and md.type == "MESH_CACHE"
+    assert md.cache_format == "PC2" and md.frame_start == 1.0
+    assert bpy.path.abspath(md.filepath) == str(tmp_path / "cache" / "Sheet.pc2")
+    assert baked.modifiers[1].name == "ThinBurn Burn" and baked.modifiers[1].type == "NODES"
+    _, data = addon.cache.read_pc2(tmp_path / "cache" / "Sheet.pc2")
+    for frame in (1, 15, FRAMES):
+        np.testing.assert_allclose(evaluated_positions(baked, frame), data[frame - 1], atol=1e-6)
+
+
+def test_attributes_hold_frames_and_nothing_ignites_before_the_key(addon, baked):
+    never = addon.cache.NEVER_FRAME
+    ignite = point_attribute(baked, "thinburn_ignite_time")
+    burnout = point_attribute(baked, "thinburn_burnout_time")
+    for name in ("thinburn_ignite_time", "thinburn_burnout_time"):
+        attr = baked.data.attributes[name]
+        assert attr.domain == "POINT" and attr.data_type == "FLOAT"
+    char = baked.data.attributes["thinburn_char"]
+    assert char.domain == "POINT" and char.data_type == "FLOAT_COLOR"
+    lit = ignite < never
+    assert lit.any(), "the igniter lit nothing"
+    assert (~lit).any(), "everything ignited: the bake is too long to test the front"
+    assert ignite[lit].min() >= LIT_FROM  # nothing before the igniter's key
+    assert ignite[lit].max() <= FRAMES
+    assert np.all(burnout[lit] > ignite[lit])
+    assert np.all(burnout[~lit] == never)
+    # The corner vertex next to the igniter goes first.
+    assert ignite[0] == ignite[lit].min()
+
+
+def test_viewport_colour_follows_the_frame(addon, baked):
+    def char_colours(frame):
+        bpy.context.scene.frame_set(frame)
+        dg = bpy.context.evaluated_depsgraph_get()
+        mesh = baked.evaluated_get(dg).data
+        attr = mesh.attributes["thinburn_char"]
+        out = np.empty(4 * len(attr.data), dtype=np.float32)
+        attr.data.foreach_get("color", out)
+        return out.reshape(-1, 4)
+
+    before, after = char_colours(LIT_FROM - 1), char_colours(FRAMES)
+    assert np.ptp(before[:, :3], axis=0).max() < 1e-6  # all paper before the fire
+    assert before[0, :3].sum() - after[0, :3].sum() > 0.5  # the lit corner darkened
+
+
+def test_sheet_moves_once_the_core_crumples(addon, baked, tmp_path):
+    import thinburn
+    probe = make_sheet("Probe", n=5, size=0.1)
+    verts = np.array([probe.matrix_world @ v.co for v in probe.data.vertices])
+    faces = [tuple(p.vertices) for p in probe.data.polygons]
+    tris = [(a, b, c) for a, b, c, d in faces] + [(a, c, d) for a, b, c, d in faces]
+    sim = thinburn.Simulation(verts, tris, cells=16)
+    sim.ignite(verts[0], radius=0.05)
+    for _ in range(48):
+        sim.step(1 / 24)
+    if np.allclose(sim.vertex_positions(), verts, atol=1e-9):
+        pytest.skip("the core's vertex_positions do not move yet (crumpling has not landed)")
+    rest = np.array([v.co for v in baked.data.vertices], dtype=np.float32)
+    moved = np.linalg.norm(evaluated_positions(baked, FRAMES) - rest, axis=1)
+    assert moved.max() > 1e-4
+
+
+def test_cancel_keeps_the_previous_bake(addon, baked, tmp_path):
+    path = tmp_path / "cache" / "Sheet.pc2"
+    before_file = path.read_bytes()
+    before_ignite = point_attribute(baked, "thinburn_ignite_time").copy()
+    bpy.context.scene.frame_set(5)
+    ig = bpy.data.objects["Igniter"]
+    ig.location = (0.1, 0.1, 0.5)  # a different bake, should it finish
+    job = addon.job.BakeJob(bpy.context, baked)
+    while job.frames_done < 5:
+        job.tick(budget_s=0.05)
+    job.cancel()
+    assert path.read_bytes() == before_file
+    assert not (tmp_path / "cache" / "Sheet.pc2.partial").exists()
+    np.testing.assert_array_equal(point_attribute(baked, "thinburn_ignite_time"), before_ignite)
+    assert baked.modifiers[0].name == "ThinBurn Cache"
+    assert bpy.context.scene.frame_current == 5  # the artist's frame is back
+
+
+def test_free_removes_the_bake(addon, baked, tmp_path):
+    assert bpy.ops.thinburn.free_bake() == {"FINISHED"}
+    assert not baked.modifiers
+    names = {a.name for a in baked.data.attributes}
+    assert not names & {"thinburn_ignite_time", "thinburn_burnout_time", "thinburn_char"}
+    assert not (tmp_path / "cache" / "Sheet.pc2").exists()
+    assert not any(slot.material for slot in baked.material_slots)
+    assert baked.thinburn.baked_file == ""
+
+
+def test_bake_survives_save_and_reload(addon, tmp_path):
+    blend = tmp_path / "scene.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(blend))
+    sheet = make_sheet()
+    setup_bake(sheet, frames=12)  # the default cache folder: //thinburn_cache/
+    make_igniter(sheet, (0.0, 0.0, 0.5), lit_from=1)
+    assert bpy.ops.thinburn.bake() == {"FINISHED"}
+    assert sheet.modifiers["ThinBurn Cache"].filepath == "//thinburn_cache/Sheet.pc2"
+    bpy.ops.wm.save_mainfile()
+    expect = evaluated_positions(sheet, 12)
+    bpy.ops.wm.open_mainfile(filepath=str(blend))
+    sheet = bpy.data.objects["Sheet"]
+    path = tmp_path / "thinburn_cache" / "Sheet.pc2"
+    assert path.exists()
+    assert bpy.path.abspath(sheet.modifiers["ThinBurn Cache"].filepath) == str(path)
+    np.testing.assert_allclose(evaluated_positions(sheet, 12), expect, atol=1e-7)
+    assert "thinburn_ignite_time" in sheet.data.attributes
+
+
+def test_moving_igniter_lights_its_path(addon, tmp_path):
+    sheet = make_sheet(n=17, size=0.4)
+    setup_bake(sheet, frames=10, cells=32, cache_dir=tmp_path)
+    sheet.thinburn.crumple = False  # a sheet that stays flat: the path alone decides what burns
+    ig = make_igniter(sheet, (-0.19, 0.0, 0.5), lit_from=1, radius=0.01)
+    ig.keyframe_insert("location", frame=1)
+    ig.location = (0.19, 0.0, 0.5)
+    ig.keyframe_insert("location", frame=3)  # crosses the sheet in two frames
+    assert bpy.ops.thinburn.bake() == {"FINISHED"}
+    ignite = point_attribute(sheet, "thinburn_ignite_time")
+    middle_row = ignite.reshape(17, 17)[8, 1:-1]  # the vertices the igniter passes over
+    # All lit by the end of the crossing (frame 3), in order from left to right.
+    assert middle_row.max() <= 3.0 + 1e-3
+    assert np.all(np.diff(middle_row) >= -0.05)
+
+
+def test_wind_is_read_per_frame(addon, tmp_path):
+    sheet = make_sheet()
+    setup_bake(sheet, frames=3, cache_dir=tmp_path)
+    make_igniter(sheet, (0.0, 0.0, 0.5))
+    bpy.ops.object.effector_add(type="WIND", rotation=(0.0, np.pi / 2, 0.0))  # blows along +x
+    wind = bpy.context.active_object
+    wind.field.strength = 2.0
+    wind.keyframe_insert("field.strength", frame=1)
+    wind.field.strength = 6.0
+    wind.keyframe_insert("field.strength", frame=3)
+    sheet.thinburn.wind_scale = 0.5
+    inputs = addon.inputs
+    winds = inputs.wind_objects(bpy.context.view_layer)
+    assert winds == [wind.name]
+    at1 = inputs.sample_frame(bpy.context.scene, 1, sheet.name, ["Igniter"], winds)
+    at3 = inputs.sample_frame(bpy.context.scene, 3, sheet.name, ["Igniter"], winds)
+    np.testing.assert_allclose(at1.wind, (1.0, 0.0, 0.0), atol=1e-6)
+    np.testing.assert_allclose(at3.wind, (3.0, 0.0, 0.0), atol=1e-6)
+    assert at1.igniters[0][1] == 1.0
+
+
+@pytest.mark.parametrize("case, message", [
+    ("no_collection", "no igniters: set an Igniter collection"),
+    ("empty_collection", "no igniters: the collection 'Igniters' is empty"),
+    ("empty_mesh", "has no faces"),
+    ("cache_not_a_folder", "cannot create the cache folder"),
+    ("unsaved_relative", "not saved yet"),
+    ("bad_range", "frame range"),
+    ("pin_group_missing", "pin group"),
+])
+def test_bad_settings_give_a_clear_report(addon, tmp_path, case, message):
+    sheet = make_sheet()
+    setup_bake(sheet, frames=5, cache_dir=tmp_path)
+    if case != "no_collection":
+        coll = bpy.data.collections.new("Igniters")
+        bpy.context.scene.collection.children.link(coll)
+        sheet.thinburn.igniter_collection = coll
+        if case != "empty_collection":
+            make_igniter(sheet, (0.0, 0.0, 0.5))
+    if case == "empty_mesh":
+        sheet.data.clear_geometry()
+    elif case == "cache_not_a_folder":
+        blocker = tmp_path / "file.txt"
+        blocker.write_text("not a folder")
+        sheet.thinburn.cache_dir = str(blocker / "cache")
+    elif case == "unsaved_relative":
+        sheet.thinburn.cache_dir = "//cache/"
+    elif case == "bad_range":
+        sheet.thinburn.frame_end = 1
+    elif case == "pin_group_missing":
+        if not addon.job.core_supports("pinned"):
+            message = "cannot pin"
+        sheet.thinburn.pin_group = "Nope"
+    with pytest.raises(RuntimeError) as info:
+        bpy.ops.thinburn.bake()
+    text = str(info.value)
+    assert message in text
+    assert "Traceback" not in text
+    assert not sheet.modifiers
+
+
+def _modal_harness(addon, job):
+    """The modal operator's methods on a stand-in instance (no window in bpy-as-a-module)."""
+    from types import SimpleNamespace
+    op_cls = addon.operators.THINBURN_OT_bake
+    reports, status = [], []
+    op = SimpleNamespace(_job=job, _timer=None, _status_bar=False,
+                         report=lambda kind, text: reports.append((kind, text)))
+    op._end = lambda ctx: op_cls._end(op, ctx)
+    ctx = SimpleNamespace(window_manager=bpy.context.window_manager, scene=bpy.context.scene,
+                          workspace=SimpleNamespace(status_text_set=status.append),
+                          screen=SimpleNamespace(areas=[]))
+    addon.operators._running[ctx.scene.name] = job
+
+    def send(kind):
+        return op_cls.modal(op, ctx, SimpleNamespace(type=kind, value="PRESS"))
+    return send, reports, status
+
+
+def test_modal_bake_runs_on_timer_events_and_esc_cancels(addon, baked, tmp_path):
+    path = tmp_path / "cache" / "Sheet.pc2"
+    before = path.read_bytes()
+    before_ignite = point_attribute(baked, "thinburn_ignite_time").copy()
+    bpy.data.objects["Igniter"].location = (0.1, 0.1, 0.5)
+    send, reports, status = _modal_harness(addon, addon.job.BakeJob(bpy.context, baked))
+    assert send("MOUSEMOVE") == {"PASS_THROUGH"}
+    for _ in range(3):
+        assert send("TIMER") == {"RUNNING_MODAL"}
+    assert any("frame" in s for s in status if s)
+    assert send("ESC") == {"CANCELLED"}
+    assert path.read_bytes() == before
+    np.testing.assert_array_equal(point_attribute(baked, "thinburn_ignite_time"), before_ignite)
+    assert "cancelled" in reports[-1][1]
+    assert addon.operators.running_job(bpy.context.scene) is None
+
+    job = addon.job.BakeJob(bpy.context, baked)
+    send, reports, status = _modal_harness(addon, job)
+    deadline = time.monotonic() + 60.0
+    try:
+        while (result := send("TIMER")) == {"RUNNING_MODAL"} and time.monotonic() < deadline:
+            time.sleep(0.001)  # timer events come every 50 ms in Blender
+    finally:
+        if not job.finished:
+            job.cancel()
+        addon.operators._running.clear()
+    assert result == {"FINISHED"}, reports
+    # The igniter moved to the opposite corner: the new bake replaced the old one.
+    ignite = point_attribute(baked, "thinburn_ignite_time")
+    assert ignite[-1] == ignite.min() < ignite[0]
+    assert status[-1] is None  # the status bar is given back
+
+
+def test_deleting_an_igniter_mid_bake_stops_cleanly(addon, baked, tmp_path):
+    path = tmp_path / "cache" / "Sheet.pc2"
+    before = path.read_bytes()
+    job = addon.job.BakeJob(bpy.context, baked)
+    job.tick()
+    bpy.data.objects.remove(bpy.data.objects["Igniter"])
+    with pytest.raises(addon.inputs.BakeError, match="'Igniter' was deleted"):
+        for _ in range(1000):
+            job.tick()
+    assert job.finished and not job.worker.is_alive()
+    assert path.read_bytes() == before and not (tmp_path / "cache" / "Sheet.pc2.partial").exists()
+
+
+def test_bake_writes_fire_particles_when_the_core_has_them(addon, tmp_path, monkeypatch):
+    """The guarded path for Simulation.particles(), with a core stand-in that has it."""
+    import thinburn
+
+    class WithParticles(thinburn.Simulation):
+        def particles(self):
+            k = int(round(self.time * 24)) % 3  # 0, 1, 2 particles, frame after frame
+            pos = np.tile([0.0, 0.0, 0.6], (k, 1)) + 0.01 * np.arange(k)[:, None]
+            return pos, np.full(k, 1000.0 + self.time)
+
+    monkeypatch.setattr(thinburn, "Simulation", WithParticles)
+    sheet = make_sheet()
+    setup_bake(sheet, frames=6, cache_dir=tmp_path)
+    make_igniter(sheet, (0.0, 0.0, 0.5))
+    assert bpy.ops.thinburn.bake() == {"FINISHED"}
+    head, data = addon.cache.read_pc2(tmp_path / "Sheet_fire.pc2")
+    assert head["samples"] == 6 and head["points"] == 4  # 2 slots: positions, then (T, alive, 0)
+    np.testing.assert_array_equal(data[:, 2:, 1], [[0, 0], [1, 0], [1, 1], [0, 0], [1, 0], [1, 1]])
+    fire = bpy.data.objects["ThinBurn Fire Sheet"]
+    assert fire.modifiers["ThinBurn Cache"].filepath.endswith("Sheet_fire.pc2")
