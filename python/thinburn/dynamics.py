@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import _core
+from .materials import MATERIALS
 
 LatticeDynamics = _core.LatticeDynamics
 Integrator = _core.Integrator
@@ -17,18 +18,14 @@ crumple_displacements = _core.crumple_displacements
 __all__ = ["PRESETS", "Integrator", "LatticeDynamics", "StepStats", "crumple_displacements",
            "explicit_stability_limit", "preset", "vertex_masses"]
 
-# Paper Table 1: spring coefficients (times stiffness_unit N/m) and C_damping (1/s, per kg).
-# The transverse diagonals (not in the paper) take the structure coefficient: they act as
-# structure springs between the layers.
+# Paper Table 1 (thinburn.MATERIALS): spring coefficients (times stiffness_unit N/m) and
+# C_damping (1/s, per kg). The transverse diagonals (not in the paper) take the structure
+# coefficient: they act as structure springs between the layers.
 PRESETS = {
-    "paper": dict(k_structure=0.05, k_shear=0.05, k_flex=0.05, c_damping=1.7),
-    "cloth": dict(k_structure=0.3, k_shear=0.01, k_flex=0.04, c_damping=2.5),
-    "hard_paper": dict(k_structure=0.5, k_shear=0.01, k_flex=0.001, c_damping=1.7),
-    "silk": dict(k_structure=0.01, k_shear=0.01, k_flex=0.01, c_damping=2.5),
-    "curtain": dict(k_structure=0.3, k_shear=0.01, k_flex=0.04, c_damping=2.5),
+    name: dict(k_structure=m.K_structure, k_shear=m.K_shear, k_flex=m.K_flex, c_damping=m.C_damping,
+               k_transverse=m.K_structure)
+    for name, m in MATERIALS.items()
 }
-for _p in PRESETS.values():
-    _p["k_transverse"] = _p["k_structure"]
 
 
 def preset(name: str, **overrides) -> dict:
