@@ -28,6 +28,7 @@ class Scene:
     pinned: np.ndarray | None = None
     wind: tuple = (0.0, 0.0, 0.0)
     params: dict = field(default_factory=dict)
+    view_pad: float = 0.35  # room around the sheet in the 3-D view, in sheet sizes
 
 
 def default_scene(material="paper") -> Scene:
@@ -49,7 +50,7 @@ def default_scene(material="paper") -> Scene:
         top = np.flatnonzero(np.isclose(v[:, 2], v[:, 2].max()))
         return Scene("1 m × 1.4 m curtain hanging from its top edge, wind from behind, lit at the bottom",
                      v, f, (0.5, 0.0, 0.06), 0.02, pinned=top, wind=(0.0, 1.5, 0.0),
-                     params=dict(climb=0.4))
+                     params=dict(climb=0.4), view_pad=0.05)
     v, f = rect_sheet(A4[0], A4[1], nx=43, ny=61)
     return Scene(f"A4 sheet of {material} lying on a table, lit at a corner", v, f,
                  (0.004, 0.004, 0.0), 0.006, floor=0.0)
@@ -75,7 +76,8 @@ def run_demo(out_dir, material="paper", cells=128, fps=24.0, max_time=240.0, fra
     expected_steps = int(np.ceil(expected / dt))
     record_every = max(1, int(round(expected_steps / frames)))
     progress = None if quiet else Progress(expected_steps, label=f"burning {material}")
-    renderer = render.SceneRenderer(scene.faces, sim.vertex_positions(), material, scene.floor)
+    renderer = render.SceneRenderer(scene.faces, sim.vertex_positions(), material, scene.floor,
+                                    pad=scene.view_pad)
     store = {k: [] for k in ("time", "cell_states", "cell_char", "vertex_positions", "vertex_char",
                              "lattice_positions")}
     particle_frames, images, step, t0, sim_seconds = [], [], 0, time.perf_counter(), 0.0
