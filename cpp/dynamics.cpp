@@ -19,6 +19,7 @@ constexpr int kDotChunk = 4096;
 constexpr int kParallelMin = 1024;  // below this many items a loop runs on one thread
 constexpr int kMaxPasses = 4;
 constexpr int kMaxContactRounds = 8;  // solves per implicit substep while contacts are added
+constexpr double kPi = 3.14159265358979323846;
 
 void require(bool ok, const std::string& what) {
   if (!ok) throw std::invalid_argument(what);
@@ -126,6 +127,79 @@ LatticeDynamics::LatticeDynamics(FfdLattice& lattice, const DynamicsParams& p)
   slot_.assign(n_, -1);
   active_.reserve(n_);
   contact_ = Eigen::VectorXd::Constant(n_, -1.0);
+  build_bimetal();
+}
+
+void LatticeDynamics::build_bimetal() {
+  // Geometry of the rest lattice that the bimetal rest lengths bend: each spring joins two
+  // couples whose centres are mid_sep_ apart, at offsets +-(half the couple's thickness) from the
+  // mid-surface (+ toward the top).
+  const RowMatX3& r = lat_.rest();
+  const int C = M_ * M_;
+  auto centre = [&](int c) { return Eigen::Vector3d(0.5 * (r.row(2 * c) + r.row(2 * c + 1)).transpose()); };
+  auto offset = [&](int v) {
+    const double half = 0.5 * (r.row(v | 1) - r.row(v & ~1)).norm();
+    return (v & 1) ? half : -half;
+  };
+  base_len_ = rest_len_;
+  const int ns = static_cast<int>(sa_.size());
+  mid_sep_.assign(ns, 0.0);
+  off_a_.assign(ns, 0.0);
+  off_b_.assign(ns, 0.0);
+  for (int s = 0; s < ns; ++s) {
+    mid_sep_[s] = (centre(sb_[s] / 2) - centre(sa_[s] / 2)).norm();
+    off_a_[s] = offset(sa_[s]);
+    off_b_[s] = offset(sb_[s]);
+  }
+  couple_spacing_ = Eigen::VectorXd::Zero(C);
+  for (int i = 0; i < M_; ++i)
+    for (int j = 0; j < M_; ++j) {
+      double sum = 0.0;
+      int k = 0;
+      const int di[4] = {-1, 1, 0, 0}, dj[4] = {0, 0, -1, 1};
+      for (int q = 0; q < 4; ++q) {
+        const int oi = i + di[q], oj = j + dj[q];
+        if (oi < 0 || oi >= M_ || oj < 0 || oj >= M_) continue;
+        sum += (centre(oi * M_ + oj) - centre(i * M_ + j)).norm();
+        ++k;
+      }
+      couple_spacing_(i * M_ + j) = k > 0 ? sum / k : 1.0;
+    }
+}
+
+double LatticeDynamics::bimetal_ratio(int s, double kappa) const {
+  // Distance between two points of a sheet bent to curvature kappa (centre of curvature on the
+  // top side), at mid-surface arc length s apart and offsets oa, ob along the normals:
+  // d^2 = (oa - ob)^2 + (1 - kappa oa)(1 - kappa ob) chord^2, chord = 2 sin(kappa s / 2) / kappa.
+  // The top face (o > 0) shortens by kappa o per unit length, the bottom lengthens: a bimetal
+  // strip. Returned relative to the flat sheet, so that the rest lattice's own shape is kept.
+  const double sep = mid_sep_[s], oa = off_a_[s], ob = off_b_[s];
+  const double d0 = std::sqrt((oa - ob) * (oa - ob) + sep * sep);
+  if (!(d0 > 0.0) || sep == 0.0) return 1.0;
+  // At most a half turn between the couples, and the layers stay on their side of the centre.
+  const double omax = std::max(std::abs(oa), std::abs(ob));
+  double k = std::clamp(kappa, -kPi / sep, kPi / sep);
+  if (omax > 0.0) k = std::clamp(k, -0.9 / omax, 0.9 / omax);
+  const double half = 0.5 * k * sep;
+  const double chord = std::abs(half) > 1e-12 ? sep * std::sin(half) / half : sep;
+  const double d2 = (oa - ob) * (oa - ob) + (1.0 - k * oa) * (1.0 - k * ob) * chord * chord;
+  return std::sqrt(std::max(d2, 0.0)) / d0;
+}
+
+void LatticeDynamics::apply_bimetal(const Eigen::VectorXd& D, bool all) {
+  // Rest lengths are a function of D alone (not of the path), so the springs never carry the
+  // history of earlier crumples; only springs touching a couple whose D changed are recomputed.
+  const int ns = static_cast<int>(sa_.size());
+#ifdef THINBURN_HAVE_OPENMP
+#pragma omp parallel for num_threads(thinburn::num_threads()) schedule(static) if (ns > kParallelMin)
+#endif
+  for (int s = 0; s < ns; ++s) {
+    const int ca = sa_[s] / 2, cb = sb_[s] / 2;
+    if (ca == cb) continue;  // a couple's own thickness spring keeps its length
+    if (!all && delta_(ca) == 0.0 && delta_(cb) == 0.0) continue;
+    const double kappa = 0.5 * p_.crumple_gain * (D(ca) / couple_spacing_(ca) + D(cb) / couple_spacing_(cb));
+    rest_len_[s] = base_len_[s] * bimetal_ratio(s, kappa);
+  }
 }
 
 void LatticeDynamics::build_springs() {
@@ -202,7 +276,9 @@ void LatticeDynamics::set_params(const DynamicsParams& p) {
       o.c_damping != p.c_damping || o.gravity != p.gravity || o.buoyancy != p.buoyancy ||
       o.wind_drag != p.wind_drag || o.has_floor != p.has_floor || o.floor_z != p.floor_z ||
       o.friction != p.friction || o.integrator != p.integrator || o.sleeping != p.sleeping ||
-      o.sleep_speed != p.sleep_speed;
+      o.sleep_speed != p.sleep_speed || o.bimetal != p.bimetal ||
+      (p.bimetal && o.crumple_gain != p.crumple_gain);
+  if (p.bimetal && (!o.bimetal || o.crumple_gain != p.crumple_gain)) bimetal_all_ = true;
   p_ = p;
   if (moved) std::fill(awake_.begin(), awake_.end(), 1);
 }
@@ -899,22 +975,25 @@ StepStats LatticeDynamics::step(double dt, const Eigen::VectorXd& D, const Eigen
   heat_ = heat;
   delta_ = p_.crumple_gain * (D - D_prev_);
   const bool crumple = delta_.size() > 0 && delta_.cwiseAbs().maxCoeff() > 0.0;
-  if (crumple) {
+  const bool bimetal = p_.bimetal && (crumple || bimetal_all_);
+  if (crumple && !p_.bimetal) {
     crumple_displacements(M_, lat_.positions(), delta_, pinned_, disp_);
     if (p_.crumple_momentum) remove_crumple_translation();
   } else {
     disp_.setZero();
   }
   for (int v = 0; v < n_; ++v)
-    forced_[v] = disp_.row(v).squaredNorm() > 0.0 ||
+    forced_[v] = disp_.row(v).squaredNorm() > 0.0 || (p_.bimetal && delta_(v / 2) != 0.0) ||
                  std::abs(p_.buoyancy * (heat_(v) - heat_prev_(v))) * dt >= p_.sleep_speed;
+  if (bimetal && bimetal_all_) std::fill(awake_.begin(), awake_.end(), 1);
   if (!p_.sleeping)
     std::fill(awake_.begin(), awake_.end(), 1);
   else
     wake_around_forcing();
   drift_ = disp_ / dt;
-  const bool plastic = crumple && p_.plasticity > 0.0;
-  if (plastic) rest_save_ = rest_len_;
+  const bool plastic = crumple && !p_.bimetal && p_.plasticity > 0.0;
+  if (plastic || bimetal) rest_save_ = rest_len_;
+  if (bimetal) apply_bimetal(D, bimetal_all_);
   bool plastic_done = false;
   try {
     for (int pass = 1;; ++pass) {
@@ -945,9 +1024,10 @@ StepStats LatticeDynamics::step(double dt, const Eigen::VectorXd& D, const Eigen
     }
   } catch (...) {
     heat_ = heat_save_;
-    if (plastic) rest_len_ = rest_save_;
+    if (plastic || bimetal) rest_len_ = rest_save_;
     throw;
   }
+  if (bimetal) bimetal_all_ = false;
   D_prev_ = D;
   if (p_.sleeping) update_sleep(dt);
   for (int v = 0; v < n_; ++v)

@@ -40,6 +40,7 @@ struct DynamicsParams {
   double crumple_gain = 1.0;   ///< multiplies the increase of D turned into a crumple
   double plasticity = 1.0;     ///< in [0, 1]: share of each crumple that the springs' rest lengths keep
   bool crumple_momentum = false;  ///< remove the crumple's net translation (it may bend, not move, the sheet)
+  bool bimetal = false;        ///< D shrinks the heated face's springs (curvature gain * D / spacing); false: Fig. 5's prescribed chord motion
   double sleep_speed = 1e-4;   ///< m/s: slower vertices, unforced, may sleep
   bool sleeping = true;        ///< false: every free vertex integrates every step
   int substeps = 0;            ///< 0: chosen per step from stability (explicit) or motion (implicit)
@@ -111,7 +112,7 @@ class LatticeDynamics {
   /// @brief Upper bound (block Gershgorin) on the largest frequency of M^-1 K over free
   /// vertices at the current state, rad/s.
   double max_frequency() const;
-  /// @brief Rest lengths of the springs (changed by plasticity), m.
+  /// @brief Rest lengths of the springs (changed by plasticity, or set from D when bimetal), m.
   const std::vector<double>& rest_lengths() const { return rest_len_; }
   /// @brief Spring endpoints, (springs) x 2.
   Eigen::Matrix<int, Eigen::Dynamic, 2, Eigen::RowMajor> spring_pairs() const;
@@ -141,6 +142,9 @@ class LatticeDynamics {
   void precondition(const double* in, double* out);
   void apply_floor(double h);
   void apply_plasticity();
+  void build_bimetal();
+  void apply_bimetal(const Eigen::VectorXd& D, bool all);
+  double bimetal_ratio(int s, double kappa) const;
   void remove_crumple_translation();
   bool wake_stressed_sleepers(double dt);
   void update_sleep(double dt);
@@ -154,6 +158,11 @@ class LatticeDynamics {
   std::vector<int> sa_, sb_;
   std::vector<std::uint8_t> kind_;
   std::vector<double> rest_len_;
+  std::vector<double> base_len_;      // rest lengths of the rest lattice (bimetal scales them)
+  std::vector<double> mid_sep_;       // per spring: rest distance between its couples' centres
+  std::vector<double> off_a_, off_b_; // per spring: its ends' offsets from the mid-surface (+ top)
+  Eigen::VectorXd couple_spacing_;    // per couple: mean rest distance to its axis neighbours
+  bool bimetal_all_ = true;           // the next bimetal step recomputes every spring
   std::vector<int> inc_start_, inc_spring_, inc_other_;
   std::vector<int> vert_spring_;    // per couple: its top-bottom spring
   Eigen::VectorXd contact_;         // per vertex: floor impulse per mass of this substep, -1 if free

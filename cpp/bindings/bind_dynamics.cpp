@@ -68,7 +68,8 @@ void apply_kwargs(DynamicsParams& p, const py::kwargs& kw) {
                      : k == "cg_velocity_tolerance" ? &p.cg_velocity_tolerance
                                              : nullptr;
     bool* bfield = k == "has_floor" ? &p.has_floor : k == "sleeping" ? &p.sleeping
-                   : k == "crumple_momentum" ? &p.crumple_momentum : nullptr;
+                   : k == "crumple_momentum" ? &p.crumple_momentum
+                   : k == "bimetal" ? &p.bimetal : nullptr;
     int* ifield = k == "substeps"            ? &p.substeps
                   : k == "max_substeps"      ? &p.max_substeps
                   : k == "cg_max_iterations" ? &p.cg_max_iterations
@@ -102,6 +103,7 @@ py::dict params_dict(const DynamicsParams& p) {
                   "has_floor"_a = p.has_floor, "floor_z"_a = p.floor_z, "friction"_a = p.friction,
                   "integrator"_a = names[int(p.integrator)], "crumple_gain"_a = p.crumple_gain,
                   "plasticity"_a = p.plasticity, "crumple_momentum"_a = p.crumple_momentum,
+                  "bimetal"_a = p.bimetal,
                   "sleep_speed"_a = p.sleep_speed,
                   "sleeping"_a = p.sleeping, "substeps"_a = p.substeps,
                   "max_substeps"_a = p.max_substeps, "safety"_a = p.safety,

@@ -16,7 +16,7 @@ INTEGRATORS = ("implicit", "symplectic", "explicit")
 # validate them and name the field in their errors). See docs/dynamics.md, docs/particles.md,
 # docs/bending.md for units and meanings.
 DYNAMICS_KEYS = ("k_thickness", "k_transverse", "stiffness_unit", "buoyancy", "wind_drag", "friction",
-                 "crumple_gain", "plasticity", "crumple_momentum", "sleep_speed", "sleeping", "substeps", "max_substeps",
+                 "crumple_gain", "plasticity", "crumple_momentum", "bimetal", "sleep_speed", "sleeping", "substeps", "max_substeps",
                  "safety", "max_stretch", "cg_tolerance", "cg_max_iterations", "gravity")
 BENDING_KEYS = ("ct", "alpha", "beta", "d_min", "max_rotation", "heat_tolerance", "heat_fast")
 PARTICLE_PREFIX = "particle_"
@@ -68,7 +68,9 @@ class Simulation:
         * the bending (eqs 2-6): ``ct``, ``alpha``, ``beta``, ``d_min``, ``max_rotation``,
           ``heat_tolerance``, ``heat_fast``;
         * the motion: ``k_thickness``, ``k_transverse``, ``stiffness_unit``, ``buoyancy``,
-          ``wind_drag``, ``friction``, ``crumple_gain``, ``plasticity``, ``sleep_speed``,
+          ``wind_drag``, ``friction``, ``crumple_gain``, ``plasticity``, ``crumple_momentum``,
+          ``bimetal`` (default True: D shrinks the heated face's springs, docs/dynamics.md §2;
+          False: the paper's prescribed chord motion), ``sleep_speed``,
           ``sleeping``, ``substeps``, ``max_substeps``, ``safety``, ``max_stretch``,
           ``cg_tolerance``, ``cg_max_iterations``, ``gravity``;
         * the particles, prefixed ``particle_``: ``particle_capacity``,
@@ -125,7 +127,8 @@ class Simulation:
         # integrator tests use; max_stretch=1 lets a frame's crumple go in one substep.
         material_dynamics = dict(k_structure=mat.K_structure, k_shear=mat.K_shear, k_flex=mat.K_flex,
                                  c_damping=mat.C_damping, k_transverse=mat.K_structure,
-                                 cg_tolerance=1e-4, max_stretch=1.0, crumple_momentum=True)
+                                 cg_tolerance=1e-4, max_stretch=1.0, crumple_momentum=True,
+                                 bimetal=True)
         _set_group(p.set_dynamics, "material", material_dynamics)
         _set_group(p.set_bending, "material", dict(cp=mat.Cp, alpha=mat.alpha, beta=mat.beta))
         _set_group(p.set_dynamics, None, groups["dynamics"])
