@@ -123,12 +123,12 @@ class Simulation:
             elif key.startswith(PARTICLE_PREFIX) and key[len(PARTICLE_PREFIX):] in PARTICLE_KEYS:
                 groups["particles"][key[len(PARTICLE_PREFIX):]] = overrides.pop(key)
         p = Simulation._fire_params(mat, cells, seed, front, overrides)
-        # A picture needs the implicit solve to a 1e-4 relative residual, not the 1e-8 that the
-        # integrator tests use; max_stretch=1 lets a frame's crumple go in one substep.
+        # max_stretch=1 lets a frame's crumple go in one substep. The conjugate gradients keep
+        # the core's 1e-8 relative residual: a looser solve (1e-4 was tried) leaves residual
+        # forces that, on light ash late in a burn, push the sheet tens of cm across the table.
         material_dynamics = dict(k_structure=mat.K_structure, k_shear=mat.K_shear, k_flex=mat.K_flex,
                                  c_damping=mat.C_damping, k_transverse=mat.K_structure,
-                                 cg_tolerance=1e-4, max_stretch=1.0, crumple_momentum=True,
-                                 bimetal=True)
+                                 max_stretch=1.0, crumple_momentum=True, bimetal=True)
         _set_group(p.set_dynamics, "material", material_dynamics)
         _set_group(p.set_bending, "material", dict(cp=mat.Cp, alpha=mat.alpha, beta=mat.beta))
         _set_group(p.set_dynamics, None, groups["dynamics"])
