@@ -186,3 +186,31 @@ def test_the_crumpled_sheet_changes_the_fires_route(a4):
         times.append(sim.ignition_times())
     lit = [np.isfinite(t) for t in times]
     assert not np.array_equal(lit[0], lit[1])
+
+
+def _lift_after(material, seconds=20.0, **kw):
+    v, f = rect_sheet(0.21, 0.297, nx=22, ny=31)
+    sim = thinburn.Simulation(v, f, cells=48, floor=0.0, material=material, seed=1, **kw)
+    sim.ignite((0.0, 0.0, 0.0), radius=0.01)
+    sim.run(seconds, dt=1 / 12)
+    return sim.vertex_positions()[:, 2].max()
+
+
+def test_hard_paper_bends_less_than_paper():
+    # Table 1: hard paper has ten times the structure stiffness and 23 times the mass (Fig. 10).
+    paper, hard = _lift_after("paper"), _lift_after("hard_paper")
+    assert paper > 0.01
+    assert hard < 0.5 * paper
+
+
+def test_a_curtain_in_wind_moves_more_than_in_still_air():
+    scene = default_scene("curtain")
+    moves = []
+    for wind in ((0.0, 0.0, 0.0), scene.wind):
+        sim = thinburn.Simulation(scene.vertices, scene.faces, material="curtain", cells=32,
+                                  pinned=scene.pinned)
+        sim.wind = wind
+        sim.ignite(scene.ignite_at, radius=scene.ignite_radius)
+        sim.run(5.0, dt=1 / 12)
+        moves.append(np.abs(sim.vertex_positions() - scene.vertices)[:, 1].max())
+    assert moves[1] > 2 * moves[0] and moves[1] > 0.05
