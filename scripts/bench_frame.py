@@ -18,11 +18,11 @@ from thinburn.demo import build, default_scene
 
 def measure(material: str, cells: int, seconds: float, threads: int, shell: bool) -> dict:
     scene = default_scene(material)
-    if not shell:
-        scene.params = {**scene.params}
-    sim = build(scene, material, cells=cells, threads=threads) if shell else thinburn.Simulation(
-        scene.vertices, scene.faces, material=material, cells=cells, threads=threads, shell=False)
-    if not shell:
+    if shell:
+        sim = build(scene, material, cells=cells, threads=threads)
+    else:
+        sim = thinburn.Simulation(scene.vertices, scene.faces, material=material, cells=cells,
+                                  threads=threads, shell=False)
         sim.ignite(scene.ignite_at, time=0.0, radius=scene.ignite_radius)
     warm = int(2 * 24)
     for _ in range(warm):  # let the fire get going
