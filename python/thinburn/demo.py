@@ -10,7 +10,6 @@ import numpy as np
 
 from . import render
 from ._progress import Progress
-from .materials import MATERIALS
 from .scenes import A4, rect_sheet
 from .simulation import Simulation
 
@@ -170,5 +169,3 @@ def _write_outputs(out_dir, sim, store, particle_frames, images, scene, material
         json.dump(summary, f, indent=2)
     return summary
 
-
-MATERIAL_NAMES = tuple(MATERIALS)
