@@ -267,7 +267,7 @@ def plot_speed_accuracy(rows, path):
             ax.plot(xs, ys, "o-", color=f"C{j}", label=m)
             key = "resolution" if "resolution" in mr[0] else "dt"
             for x, y, r in zip(xs, ys, mr):
-                lab = f"{r[key]}" if key == "resolution" else f"{r[key]:.0e}"
+                lab = f"{r[key]}" if key == "resolution" else f"{r[key]:.2g}"
                 ax.annotate(lab, (x, y), fontsize=6, xytext=(3, 3), textcoords="offset points")
         # Heat: each particle count is its own problem, so the front is taken per count
         # (ringed points only); elsewhere resolution / dt is the accuracy knob of one problem.
@@ -318,6 +318,9 @@ def plot_stability(rows, path):
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
+    if st:
+        ax.set_xticks(ws)
+        ax.set_xticklabels([f"{w:.3g}" for w in ws])
     ax.set_xlabel("ω (rad/s), largest frequency of the oscillator")
     ax.set_ylabel("largest stable dt (s)")
     ax.set_title("integrator stability (undamped, bisection over 200 steps)", fontsize=9)
