@@ -16,6 +16,7 @@ import numpy as np
 
 import thinburn
 from thinburn import _core
+from thinburn.bench import oscillator_error
 from thinburn.dynamics import vertex_masses
 from thinburn.lattice import flat_rest
 
@@ -100,26 +101,7 @@ def convergence() -> dict:
             ff.append(abs(lat.positions[0, 2] - lat.rest[0, 2] + 0.5 * g * T * T))
             hs.append(T / N)
         for N in (200, 400, 800, 1600):
-            lat = _core.FfdLattice(2, flat_rest(2, 1.0, 1.0, 0.3))
-            dyn = _core.LatticeDynamics(lat, integrator=name, substeps=1, sleeping=False,
-                                        cg_velocity_tolerance=0.0, c_damping=3.0,
-                                        gravity=[0, 0, 0], k_thickness=1.0)
-            dyn.set_masses(np.full(8, 10.0))
-            pinned = np.ones(8, dtype=np.uint8)
-            pinned[1] = 0
-            dyn.set_pinned(pinned)
-            K = -dyn.stiffness_matrix()[3:6, 3:6] / 10.0
-            u0 = 1e-6 * np.array([1.0, 2.0, -3.0])
-            x = lat.rest.copy()
-            x[1] += u0
-            dyn.set_state(x, np.zeros_like(x))
-            for _ in range(N):
-                dyn.step(1.0 / N, np.zeros(4), np.zeros(8))
-            w2, V = np.linalg.eigh(K)
-            q0 = V.T @ u0
-            wd = np.sqrt(w2 - 9.0 / 4)
-            q = np.exp(-1.5) * (q0 * np.cos(wd) + 3.0 * q0 / (2 * wd) * np.sin(wd))
-            osc.append(np.linalg.norm(lat.positions[1] - lat.rest[1] - V @ q) / 1e-6)
+            osc.append(oscillator_error(name, N, T=1.0, c=3.0)[0])
         out[name] = dict(
             free_fall_order=float(np.polyfit(np.log(hs), np.log(ff), 1)[0]),
             oscillator_order=float(np.polyfit(np.log([1 / n for n in (200, 400, 800, 1600)]),

@@ -16,15 +16,12 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import os
 import platform
-import time
 
-import numpy as np
-
-from thinburn import _core
-from thinburn.fire_front import method_enum
+from thinburn.bench import front_case as case
+from thinburn.bench import front_score as score
+from thinburn.bench import front_solve as solve
 
 METHODS = ("cellular", "cellular16", "fmm1", "fmm")
 VARIANTS = {
@@ -35,55 +32,6 @@ VARIANTS = {
     "fmm1 eulerian drive": ("fmm1", dict(huygens=False)),
     "fmm2 eulerian drive": ("fmm", dict(huygens=False)),
 }
-
-
-def case(name: str, n: int, e=(0.3, 0.4)):
-    """speed (n, n), source (row, col), spacing h, drive or None, exact T, mask of scored cells."""
-    if name == "point":
-        src = (n // 2, n // 2)
-        dr, dc = np.meshgrid(np.arange(n) - src[0], np.arange(n) - src[1], indexing="ij")
-        dist = np.hypot(dr, dc).astype(float)
-        return np.ones((n, n)), src, 1.0, None, dist, dist >= 8
-    if name == "gradient":
-        h = 1.0 / (n - 1)
-        x = np.arange(n) * h
-        xx, yy = np.meshgrid(x, x)
-        v = 1.0 + 2.0 * xx
-        src = (n // 2, n // 4)
-        d2 = (xx - x[src[1]]) ** 2 + (yy - x[src[0]]) ** 2
-        exact = np.arccosh(1.0 + 4.0 * d2 / (2.0 * (1.0 + 2.0 * x[src[1]]) * v)) / 2.0
-        return v, src, h, None, exact, np.sqrt(d2) >= 8 * h
-    if name == "ellipse":
-        src = (n // 2, n // 2)
-        dr, dc = np.meshgrid(np.arange(n) - src[0], np.arange(n) - src[1], indexing="ij")
-        d = np.hypot(dr, dc)
-        exact = (d - (e[0] * dr + e[1] * dc)) / (1.0 - e[0] ** 2 - e[1] ** 2)
-        return np.ones((n, n)), src, 1.0, e, exact, d >= 8
-    raise ValueError(name)
-
-
-def solve(speed, src, h, drive, method, repeat, **options):
-    n = speed.shape[0]
-    flat = np.ascontiguousarray(speed, dtype=np.float64).ravel()
-    er = ec = None
-    if drive is not None:
-        er, ec = np.full(n * n, float(drive[0])), np.full(n * n, float(drive[1]))
-    best, t = math.inf, None
-    for _ in range(repeat):
-        front = _core.FireFront(n, n, h, h, method_enum(method), **options)
-        front.set_speed(flat, er, ec)
-        start = time.perf_counter()
-        front.ignite(float(src[0]), float(src[1]), 0.0)
-        front.advance(math.inf)
-        best = min(best, time.perf_counter() - start)
-        t = front.arrival()
-    return t, best
-
-
-def score(t, exact, mask):
-    rel = np.abs(t - exact)[mask] / exact[mask]
-    return dict(max_rel=float(rel.max()), mean_rel=float(rel.mean()),
-                max_abs=float(np.abs(t - exact).max()))
 
 
 def main() -> None:
