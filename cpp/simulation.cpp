@@ -72,11 +72,9 @@ Eigen::Vector3d Simulation::cell_position(int cell) const {
   // the front and the emitters touch are ever deformed.
   Eigen::Vector3d p = sheet_.cell_rest().row(cell).transpose();
   if (!lattice_) return p;
-  const int N = sheet_.cells();
-  const Eigen::Vector2d st = sheet_.lattice_st((cell % N + 0.5) * sheet_.du(), (cell / N + 0.5) * sheet_.dv(), M_);
   int cp[4];
   double w[4];
-  bilinear_couples(st.x(), st.y(), cp, w);
+  cell_couples(cell, cp, w);
   const RowMatX3& x = lattice_->positions();
   const RowMatX3& x0 = lattice_->rest();
   for (int k = 0; k < 4; ++k)
@@ -193,9 +191,16 @@ std::vector<double> Simulation::ignition_times() const {
 }
 
 std::vector<int> Simulation::fringe() const {
+  std::vector<int> out;
+  fringe_into(out);
+  return out;
+}
+
+void Simulation::fringe_into(std::vector<int>& out) const {
+  // Reuses the caller's buffer: the particle emitters ask for the fringe every step.
   const int N = sheet_.cells();
   const auto& inside = sheet_.inside();
-  std::vector<int> out;
+  out.clear();
   for (int c : burning_) {
     const int r = c / N, col = c % N;
     bool edge = false;
@@ -209,7 +214,6 @@ std::vector<int> Simulation::fringe() const {
     if (edge) out.push_back(c);
   }
   std::sort(out.begin(), out.end());
-  return out;
 }
 
 std::vector<double> Simulation::cell_char() const {

@@ -73,6 +73,7 @@ class Simulation {
   std::vector<double> burn_durations() const { return duration_; }
   /// @brief Fringe cells (paper §3.1): burning cells with a neighbour neither burning nor burnt.
   std::vector<int> fringe() const;
+  void fringe_into(std::vector<int>& out) const;
   /// @brief Char per cell in [0, 1]: 0 before ignition, rising over the burn, 1 when burnt.
   std::vector<double> cell_char() const;
   /// @brief Remaining mass per cell, kg.
@@ -112,6 +113,7 @@ class Simulation {
   void build_shell(const std::vector<std::uint8_t>& pinned);
   RowMatX3 drape_lattice() const;
   void bilinear_couples(double s, double t, int* couple, double* w) const;
+  void cell_couples(int cell, int* couple, double* w) const;
   void add_cell_mass(int cell, double dm);
   void step_shell(double dt);
   void emit_particles(double dt);

@@ -86,8 +86,7 @@ void Simulation::build_shell(const std::vector<std::uint8_t>& pinned) {
     add_cell_mass(c, mass_[c]);
     int cp[4];
     double w[4];
-    const Eigen::Vector2d st = sheet_.lattice_st((c % N + 0.5) * sheet_.du(), (c / N + 0.5) * sheet_.dv(), M_);
-    bilinear_couples(st.x(), st.y(), cp, w);
+    cell_couples(c, cp, w);
     for (int k = 0; k < 4; ++k)
       for (int layer = 0; layer < 2; ++layer) control_area_[2 * cp[k] + layer] += 0.5 * w[k] * sheet_.du() * sheet_.dv();
   }
@@ -120,12 +119,16 @@ void Simulation::build_shell(const std::vector<std::uint8_t>& pinned) {
   bending_ = std::make_unique<Bending>(M_ * M_, params_.bending);
 }
 
-void Simulation::add_cell_mass(int cell, double dm) {
+void Simulation::cell_couples(int cell, int* couple, double* w) const {
   const int N = sheet_.cells();
+  const Eigen::Vector2d st = sheet_.lattice_st((cell % N + 0.5) * sheet_.du(), (cell / N + 0.5) * sheet_.dv(), M_);
+  bilinear_couples(st.x(), st.y(), couple, w);
+}
+
+void Simulation::add_cell_mass(int cell, double dm) {
   int cp[4];
   double w[4];
-  const Eigen::Vector2d st = sheet_.lattice_st((cell % N + 0.5) * sheet_.du(), (cell / N + 0.5) * sheet_.dv(), M_);
-  bilinear_couples(st.x(), st.y(), cp, w);
+  cell_couples(cell, cp, w);
   for (int k = 0; k < 4; ++k) {
     control_mass_[2 * cp[k]] += 0.5 * w[k] * dm;
     control_mass_[2 * cp[k] + 1] += 0.5 * w[k] * dm;
@@ -157,7 +160,7 @@ double Simulation::flame_side(int cell) const {
 
 void Simulation::emit_particles(double dt) {
   // Emitters: the fringe (paper §3.1), each a cell's worth of front length.
-  fringe_buf_ = fringe();
+  fringe_into(fringe_buf_);
   const Eigen::Index k = static_cast<Eigen::Index>(fringe_buf_.size());
   emit_pos_.resize(k, 3);
   emit_normal_.resize(k, 3);

@@ -136,7 +136,7 @@ def test_symmetric_input_gives_symmetric_output():
     # pyrolysis, D and motion are mirror-symmetric about x = w/2. The lattice dynamics alone is
     # symmetric to 1e-12 (tests/test_dynamics.py); here the fire front accepts mirror cells in
     # index order within a step while the shape they read moves, so the coupled result is
-    # symmetric to a stated 5 % of the motion (measured: 3 %).
+    # symmetric to a stated 5 % of the motion (measured: 0.3 %).
     v, f = rect_sheet(0.2, 0.2, nx=21, ny=21)
     sim = thinburn.Simulation(v, f, cells=40, floor=0.0, particle_birth_rate=0.0, **QUIET)
     sim.ignite((0.1, 0.1, 0.0), radius=0.012)
@@ -164,7 +164,8 @@ def test_every_preset_runs_ten_seconds_without_nan(material):
         assert np.all(np.isfinite(x))
         length = np.linalg.norm(x[edges[:, 0]] - x[edges[:, 1]], axis=1)
         worst = max(worst, float(np.max(np.abs(length / rest - 1))))
-    # Mesh edges stretch or shrink by less than 60 % over the crumple (measured: see README).
+    # Mesh edges stretch or shrink by less than 60 % over the crumple (measured at cells=32:
+    # paper 2.5 %, silk 10.6 %, the others under 0.2 %).
     assert worst < 0.6
     assert np.all(np.isfinite(sim.heat())) and np.all(np.isfinite(sim.particles()[0]))
 

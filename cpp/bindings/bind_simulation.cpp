@@ -35,6 +35,12 @@ std::string front_name(FrontMethod m) {
   return "fmm";
 }
 
+int checked_cell(const Simulation& s, int cell) {
+  if (cell < 0 || cell >= s.sheet().num_cells())
+    throw std::invalid_argument("cell: index " + std::to_string(cell) + " outside [0, N*N)");
+  return cell;
+}
+
 template <class T>
 py::array_t<T> grid(const std::vector<T>& v, int n) {
   py::array_t<T> a({n, n});
@@ -139,10 +145,10 @@ void define_simulation(py::module_& m) {
              return out;
            },
            py::arg("field"))
-      .def("grad2", &S::grad2, py::arg("cell"))
+      .def("grad2", [](const S& s, int cell) { return s.grad2(checked_cell(s, cell)); }, py::arg("cell"))
       .def("local_speed",
            [](const S& s, int cell) {
-             const LocalSpeed l = s.local_speed(cell);
+             const LocalSpeed l = s.local_speed(checked_cell(s, cell));
              return py::make_tuple(l.v, l.e_row, l.e_col);
            },
            py::arg("cell"))

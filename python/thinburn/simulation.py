@@ -106,7 +106,7 @@ class Simulation:
             if float(verts[:, 2].min()) < p.floor_z - 1e-9:
                 raise ValueError(f"floor: the sheet reaches below the floor (z min "
                                  f"{verts[:, 2].min():.6g} < floor {p.floor_z:.6g})")
-        _set_group(p.set_dynamics, "integrator", {"integrator": V.choice(integrator, "integrator", INTEGRATORS)})
+        _set_group(p.set_dynamics, None, {"integrator": V.choice(integrator, "integrator", INTEGRATORS)})
         pins = _pinned_mask(pinned, len(verts))
         self._sim = _core.Simulation(verts, tris, uvs, p, pins)
         self.params = p
@@ -367,17 +367,19 @@ class Simulation:
 
 
 def _set_group(setter, prefix, values: dict) -> None:
-    """Apply a parameter group; the core's errors get the user's name for the argument."""
+    """Apply a parameter group; the core's errors get the user's name for the argument
+    (``particle_`` keys are named with their prefix, material fields with ``material:``)."""
     if not values:
         return
     try:
         setter(values)
     except (ValueError, TypeError) as exc:
         msg = str(exc)
-        if prefix and prefix not in ("material", "integrator"):
+        if prefix == PARTICLE_PREFIX:
             for key in values:
-                msg = msg.replace(key, prefix + key) if (prefix + key) not in msg else msg
-        if prefix == "material":
+                if PARTICLE_PREFIX + key not in msg:
+                    msg = msg.replace(key, PARTICLE_PREFIX + key)
+        elif prefix == "material":
             msg = f"material: {msg}"
         raise type(exc)(msg) from None
 
