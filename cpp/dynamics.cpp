@@ -8,6 +8,7 @@
 
 #include <Eigen/Geometry>
 #include <Eigen/LU>
+#include <Eigen/SparseCholesky>
 
 #include "crumple.hpp"
 #include "threads.hpp"
@@ -18,6 +19,7 @@ namespace {
 constexpr int kDotChunk = 4096;
 constexpr int kParallelMin = 1024;  // below this many items a loop runs on one thread
 constexpr int kMaxPasses = 4;
+constexpr int kRedoShare = 16;  // a step is redone when it stresses awake over 1/16 of its awake count
 constexpr int kMaxContactRounds = 8;  // solves per implicit substep while contacts are added
 constexpr double kPi = 3.14159265358979323846;
 
@@ -104,7 +106,34 @@ void validate(const DynamicsParams& p) {
   require(p.cg_tolerance > 0.0 && p.cg_tolerance < 1.0, "cg_tolerance must be in (0, 1)");
   require(p.cg_max_iterations >= 1, "cg_max_iterations must be >= 1");
   nonneg(p.cg_velocity_tolerance, "cg_velocity_tolerance");
+  require(p.ldlt_max_vertices >= 0, "ldlt_max_vertices must be >= 0");
+  require(p.refactor_iterations >= 0, "refactor_iterations must be >= 0");
+  require(p.wake_hold >= 0 && p.wake_hold <= 10000, "wake_hold must be in [0, 10000]");
 }
+
+// The implicit system over the active vertices, lower triangle in compressed columns, and its
+// sparse LDL^T factorization, the conjugate gradients' preconditioner. The pattern depends only
+// on the active set: values are refilled in the order the pattern was built, and the symbolic
+// analysis (AMD ordering, elimination tree) is redone only when the active set changes. The
+// numeric factorization is kept over substeps and steps (masses, lengths and contacts change
+// slowly), and over changes of the active set, until a solve needs more than
+// refactor_iterations iterations or the active set has moved too far from the factored one.
+struct LatticeDynamics::Factor {
+  std::vector<int> active;      // the active set the pattern was built for
+  std::vector<int> slot;        // per vertex: its position in `active`, -1 if not in it
+  std::vector<int> blk_start;   // per active vertex: its column's 3x3 blocks in blk_row/blk_spring
+  std::vector<int> blk_row;     // row slot of each block; the vertex itself (diagonal) first
+  std::vector<int> blk_spring;  // the spring of an off-diagonal block, -1 on the diagonal
+  std::vector<std::pair<int, int>> sort_buf;
+  Eigen::SparseMatrix<double> A;
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower> ldlt;
+  Eigen::VectorXd rhs, sol;
+  bool analysed = false;  // ldlt holds the symbolic analysis of `active`
+  bool valid = false;     // ldlt holds a numeric factorization of `active`'s system
+  bool stale = false;     // the last solve took too many iterations: refactor before the next
+};
+
+LatticeDynamics::~LatticeDynamics() = default;
 
 LatticeDynamics::LatticeDynamics(FfdLattice& lattice, const DynamicsParams& p)
     : lat_(lattice), p_(p), M_(lattice.M()), n_(lattice.size()) {
@@ -122,11 +151,14 @@ LatticeDynamics::LatticeDynamics(FfdLattice& lattice, const DynamicsParams& p)
   pinned_.assign(n_, 0);
   awake_.assign(n_, 1);
   forced_.assign(n_, 0);
+  hold_.assign(n_, 0);
+  slept_at_.assign(n_, std::numeric_limits<std::int64_t>::min() / 2);
   mark_.assign(n_, 0);
   list_.reserve(n_);
   slot_.assign(n_, -1);
   active_.reserve(n_);
   contact_ = Eigen::VectorXd::Constant(n_, -1.0);
+  factor_ = std::make_unique<Factor>();
   build_bimetal();
 }
 
@@ -657,6 +689,13 @@ void LatticeDynamics::implicit_assemble(double h) {
       D += h2 * load_sym(B.jac + 6 * inc_spring_[q]);
     mat3(B.diag, a) = D;
   }
+  implicit_rhs(h);
+}
+
+void LatticeDynamics::build_jacobi(double h) {
+  Buffers B = buffers(work_, sa_.size(), n_);
+  const int na = static_cast<int>(active_.size());
+  const double h2 = h * h;
   // Couple-block Jacobi: the top-bottom spring is the stiffest, so both vertices of a couple are
   // inverted together (6 x 6); a vertex whose partner is not active gets its 3 x 3 inverse.
 #ifdef THINBURN_HAVE_OPENMP
@@ -679,7 +718,6 @@ void LatticeDynamics::implicit_assemble(double h) {
     mat3(B.pinv, 2 * a) = Ci.topLeftCorner<3, 3>();
     mat3(B.pinv, 2 * a + 1) = Ci.topRightCorner<3, 3>();
   }
-  implicit_rhs(h);
 }
 
 Eigen::Vector3d LatticeDynamics::substep_drift(int v, double h) const {
@@ -772,6 +810,29 @@ void LatticeDynamics::apply_A(double h, const double* in, double* out) {
 void LatticeDynamics::precondition(const double* in, double* out) {
   Buffers B = buffers(work_, sa_.size(), n_);
   const int na = static_cast<int>(active_.size());
+  if (precond_ldlt_) {
+    // z = S P S r: the filter S zeroes the contacts' v_z in and out. Vertices of the factored
+    // set go through the factor (the others of that set see a zero residual), the rest through
+    // their diagonal block.
+    Factor& f = *factor_;
+    f.rhs.setZero();
+    for (int a = 0; a < na; ++a) {
+      const int fs = f.slot[active_[a]];
+      if (fs < 0) continue;
+      for (int i = 0; i < 3; ++i) f.rhs[3 * fs + i] = in[3 * a + i];
+      if (contact_(active_[a]) >= 0.0) f.rhs[3 * fs + 2] = 0.0;
+    }
+    f.sol = f.ldlt.solve(f.rhs);
+    for (int a = 0; a < na; ++a) {
+      const int fs = f.slot[active_[a]];
+      if (fs >= 0)
+        vec3(out, a) = Eigen::Map<const Eigen::Vector3d>(f.sol.data() + 3 * fs);
+      else
+        vec3(out, a) = mat3(B.pinv, 2 * a) * Eigen::Map<const Eigen::Vector3d>(in + 3 * a);
+      if (contact_(active_[a]) >= 0.0) out[3 * a + 2] = 0.0;
+    }
+    return;
+  }
 #ifdef THINBURN_HAVE_OPENMP
 #pragma omp parallel for num_threads(thinburn::num_threads()) schedule(static) if (na > kParallelMin)
 #endif
@@ -784,7 +845,116 @@ void LatticeDynamics::precondition(const double* in, double* out) {
   }
 }
 
+bool LatticeDynamics::use_ldlt() const {
+  if (p_.preconditioner == Preconditioner::Auto) return static_cast<int>(active_.size()) <= p_.ldlt_max_vertices;
+  return p_.preconditioner == Preconditioner::Ldlt;
+}
+
+void LatticeDynamics::factor_pattern() {
+  Factor& f = *factor_;
+  if (f.analysed && f.active == active_) return;
+  const int na = static_cast<int>(active_.size());
+  f.active = active_;
+  f.slot = slot_;
+  f.valid = false;
+  f.blk_start.assign(1, 0);
+  f.blk_row.clear();
+  f.blk_spring.clear();
+  for (int a = 0; a < na; ++a) {
+    const int v = active_[a];
+    f.sort_buf.clear();
+    for (int q = inc_start_[v]; q < inc_start_[v + 1]; ++q)
+      if (slot_[inc_other_[q]] > a) f.sort_buf.emplace_back(slot_[inc_other_[q]], inc_spring_[q]);
+    std::sort(f.sort_buf.begin(), f.sort_buf.end());  // rows ascending within each column
+    f.blk_row.push_back(a);
+    f.blk_spring.push_back(-1);
+    for (const auto& [row, spring] : f.sort_buf) {
+      f.blk_row.push_back(row);
+      f.blk_spring.push_back(spring);
+    }
+    f.blk_start.push_back(static_cast<int>(f.blk_row.size()));
+  }
+  // Column 3a+i holds, block by block, rows 3r+i' (i' >= i in the diagonal block).
+  const int N = 3 * na;
+  const int offdiag = static_cast<int>(f.blk_row.size()) - na;
+  f.A.resize(N, N);
+  f.A.resizeNonZeros(6 * na + 9 * offdiag);
+  int* outer = f.A.outerIndexPtr();
+  int* inner = f.A.innerIndexPtr();
+  int k = 0;
+  for (int a = 0; a < na; ++a)
+    for (int i = 0; i < 3; ++i) {
+      outer[3 * a + i] = k;
+      for (int b = f.blk_start[a]; b < f.blk_start[a + 1]; ++b)
+        for (int ii = (f.blk_row[b] == a ? i : 0); ii < 3; ++ii) inner[k++] = 3 * f.blk_row[b] + ii;
+    }
+  outer[N] = k;
+  f.rhs.resize(N);
+  f.sol.resize(N);
+  f.ldlt.analyzePattern(f.A);
+  f.analysed = true;
+}
+
+void LatticeDynamics::factor_fill(double h) {
+  // A = M (1 + h c) + h W + h^2 J, with each floor contact's v_z row and column replaced by the
+  // identity, as the filtered conjugate gradients see it.
+  Factor& f = *factor_;
+  Buffers B = buffers(work_, sa_.size(), n_);
+  const int na = static_cast<int>(active_.size());
+  const double h2 = h * h;
+  const int sym[3][3] = {{0, 3, 4}, {3, 1, 5}, {4, 5, 2}};  // store_sym's layout
+  double* val = f.A.valuePtr();
+  int k = 0;
+  for (int a = 0; a < na; ++a) {
+    const bool ca = contact_(active_[a]) >= 0.0;
+    for (int i = 0; i < 3; ++i) {
+      const bool fixed_col = ca && i == 2;
+      for (int b = f.blk_start[a]; b < f.blk_start[a + 1]; ++b) {
+        const int r = f.blk_row[b];
+        if (r == a) {
+          for (int ii = i; ii < 3; ++ii)
+            val[k++] = (fixed_col || (ca && ii == 2)) ? (ii == i ? 1.0 : 0.0) : mat3(B.diag, a)(ii, i);
+          continue;
+        }
+        const bool cr = contact_(active_[r]) >= 0.0;
+        const double* J = B.jac + 6 * f.blk_spring[b];
+        for (int ii = 0; ii < 3; ++ii) val[k++] = (fixed_col || (cr && ii == 2)) ? 0.0 : -h2 * J[sym[ii][i]];
+      }
+    }
+  }
+}
+
+void LatticeDynamics::refresh_factor(double h) {
+  // A factor of another active set F still preconditions this one, S: F's part of the residual
+  // goes through A_FF^-1, the vertices outside F through their diagonal blocks (an SPD block
+  // diagonal). It is refactored when it is stale, or when S and F differ by more than a quarter.
+  Factor& f = *factor_;
+  if (f.valid && !f.stale) {
+    int outside = 0;
+    for (int v : active_) outside += f.slot[v] < 0;
+    const int ns = static_cast<int>(active_.size()), nf = static_cast<int>(f.active.size());
+    if (4 * outside <= ns && nf - (ns - outside) <= ns / 4) return;
+  }
+  factor_pattern();
+  factor_fill(h);
+  f.ldlt.factorize(f.A);
+  ++factorizations_;
+  // Not expected (A is symmetric positive definite); the solve then falls back to Jacobi.
+  f.valid = f.ldlt.info() == Eigen::Success;
+  f.stale = false;
+}
+
 int LatticeDynamics::implicit_solve(double h) {
+  const bool ldlt = use_ldlt();
+  if (ldlt) refresh_factor(h);
+  precond_ldlt_ = ldlt && factor_->valid;
+  if (!precond_ldlt_) {
+    build_jacobi(h);
+  } else {
+    Buffers B = buffers(work_, sa_.size(), n_);
+    for (int a = 0; a < static_cast<int>(active_.size()); ++a)
+      if (factor_->slot[active_[a]] < 0) mat3(B.pinv, 2 * a) = mat3(B.diag, a).inverse();
+  }
   Buffers B = buffers(work_, sa_.size(), n_);
   const int na = static_cast<int>(active_.size());
   const int N = 3 * na;
@@ -835,6 +1005,7 @@ int LatticeDynamics::implicit_solve(double h) {
       for (int i = 0; i < N; ++i) B.p[i] = B.z[i] + beta * B.p[i];
     }
   }
+  if (precond_ldlt_ && iterations > p_.refactor_iterations) factor_->stale = true;
   return iterations;
 }
 
@@ -913,7 +1084,7 @@ void LatticeDynamics::apply_floor(double h) {
   }
 }
 
-bool LatticeDynamics::wake_stressed_sleepers(double dt) {
+int LatticeDynamics::wake_stressed_sleepers(double dt) {
   list_.clear();
   for (int v : active_)
     for (int q = inc_start_[v]; q < inc_start_[v + 1]; ++q) {
@@ -923,13 +1094,15 @@ bool LatticeDynamics::wake_stressed_sleepers(double dt) {
         list_.push_back(o);
       }
     }
-  bool woke = false;
+  int woke = 0;
   for (int o : list_) {
     mark_[o] = 0;
     const Eigen::Vector3d f = supported(o, vertex_force(o, lat_.positions(), vel_));
     if (f.norm() / mass_(o) * dt >= p_.sleep_speed) {
       awake_[o] = 1;
-      woke = true;
+      // Woken within wake_hold steps of falling asleep: it flickers, so it stays awake.
+      if (steps_ - slept_at_[o] <= p_.wake_hold) hold_[o] = static_cast<std::uint16_t>(p_.wake_hold);
+      ++woke;
     }
   }
   return woke;
@@ -946,7 +1119,8 @@ void LatticeDynamics::update_sleep(double dt) {
 #endif
   for (int a = 0; a < na; ++a) {
     const int v = active_[a];
-    bool quiet = !forced_[v] && vel_.row(v).norm() < p_.sleep_speed;
+    if (hold_[v] > 0) --hold_[v];
+    bool quiet = hold_[v] == 0 && !forced_[v] && vel_.row(v).norm() < p_.sleep_speed;
     for (int q = inc_start_[v]; quiet && q < inc_start_[v + 1]; ++q)
       quiet = vel_.row(inc_other_[q]).norm() < p_.sleep_speed;
     if (quiet) quiet = supported(v, vertex_force(v, x, vel_)).norm() / mass_(v) * dt < p_.sleep_speed;
@@ -955,6 +1129,7 @@ void LatticeDynamics::update_sleep(double dt) {
   for (int v : active_) {
     if (mark_[v]) {
       awake_[v] = 0;
+      slept_at_[v] = steps_;
       vel_.row(v).setZero();
       accel_.row(v).setZero();
     }
@@ -971,6 +1146,7 @@ StepStats LatticeDynamics::step(double dt, const Eigen::VectorXd& D, const Eigen
   require(D.allFinite(), "D must be finite");
   require(heat.allFinite(), "heat must be finite");
   StepStats st;
+  factorizations_ = 0;
   heat_save_ = heat_;
   heat_ = heat;
   delta_ = p_.crumple_gain * (D - D_prev_);
@@ -1016,7 +1192,11 @@ StepStats LatticeDynamics::step(double dt, const Eigen::VectorXd& D, const Eigen
           explicit_substep(h, p_.integrator == Integrator::Explicit);
         apply_floor(h);
       }
-      if (!p_.sleeping || pass >= kMaxPasses || !wake_stressed_sleepers(dt)) break;
+      if (!p_.sleeping || pass >= kMaxPasses) break;
+      // Redo the step with the sleepers its motion stressed awake, unless they are few next to
+      // the awake set: those join the next step (a step late) rather than cost a whole pass.
+      const int woke = wake_stressed_sleepers(dt);
+      if (woke == 0 || woke * kRedoShare < st.awake) break;
       for (int a = 0; a < st.awake; ++a) {
         lat_.positions().row(active_[a]) = x_save_.row(a);
         vel_.row(active_[a]) = v_save_.row(a);
@@ -1028,8 +1208,10 @@ StepStats LatticeDynamics::step(double dt, const Eigen::VectorXd& D, const Eigen
     throw;
   }
   if (bimetal) bimetal_all_ = false;
+  st.factorizations = factorizations_;
   D_prev_ = D;
   if (p_.sleeping) update_sleep(dt);
+  ++steps_;
   for (int v = 0; v < n_; ++v)
     if (awake_[v]) heat_prev_(v) = heat_(v);
   return st;

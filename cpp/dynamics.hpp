@@ -8,6 +8,7 @@
 #include <Eigen/SparseCore>
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "lattice.hpp"
@@ -18,7 +19,14 @@ namespace thinburn {
 enum class Integrator {
   Explicit,    ///< the paper's eqs 13-15: V = V0 + a dt, Pos = Pos0 + V dt + a dt^2 / 2
   Symplectic,  ///< symplectic Euler: V = V0 + a dt, Pos = Pos0 + V dt
-  Implicit     ///< backward Euler, one Newton step per substep, conjugate gradients
+  Implicit     ///< backward Euler, one Newton step per substep, a linear solve each
+};
+
+/// @brief Preconditioner of the implicit integrator's conjugate gradients.
+enum class Preconditioner {
+  Auto,   ///< Ldlt up to ldlt_max_vertices awake vertices, Jacobi above
+  Ldlt,   ///< a sparse LDL^T factorization of the system, kept over substeps and steps until it goes stale
+  Jacobi  ///< couple-block Jacobi (each couple's 6 x 6 block inverted), rebuilt every substep
 };
 
 /// @brief Parameters of the lattice's motion; may change between steps.
@@ -43,6 +51,11 @@ struct DynamicsParams {
   bool bimetal = false;        ///< D shrinks the heated face's springs (curvature gain * D / spacing); false: Fig. 5's prescribed chord motion
   double sleep_speed = 1e-4;   ///< m/s: slower vertices, unforced, may sleep
   bool sleeping = true;        ///< false: every free vertex integrates every step
+  /// Steps a flickering vertex stays awake: one that its neighbours' motion woke within this
+  /// many steps of falling asleep. Vertices at the edge of a moving region otherwise fall asleep
+  /// and are woken again step after step, each time redoing the step (a pass) and changing the
+  /// active set (a new factorization).
+  int wake_hold = 12;
   int substeps = 0;            ///< 0: chosen per step from stability (explicit) or motion (implicit)
   int max_substeps = 10000;    ///< explicit steps needing more throw std::runtime_error
   double safety = 0.9;         ///< explicit substep h = safety * (theoretical stability limit)
@@ -50,6 +63,9 @@ struct DynamicsParams {
   double cg_tolerance = 1e-8;  ///< relative residual of the conjugate gradients
   double cg_velocity_tolerance = 1e-7;  ///< m/s: absolute floor of the CG stopping test
   int cg_max_iterations = 2000;
+  Preconditioner preconditioner = Preconditioner::Auto;
+  int ldlt_max_vertices = 200;     ///< Auto: the largest awake set given the Ldlt preconditioner
+  int refactor_iterations = 8;     ///< Ldlt: a solve taking more iterations refactors for the next one
 };
 
 /// @brief Throw std::invalid_argument naming the first invalid field.
@@ -65,6 +81,7 @@ struct StepStats {
   int substeps = 0;       ///< substeps taken
   int awake = 0;          ///< vertices integrated
   int cg_iterations = 0;  ///< conjugate-gradient iterations, all substeps and passes
+  int factorizations = 0; ///< sparse LDL^T factorizations (Ldlt preconditioner), all substeps and passes
   double omega_max = 0;   ///< rad/s, bound on the largest frequency of the awake lattice
   int passes = 0;         ///< integrations of the step (> 1 when it woke sleepers and redid it)
 };
@@ -75,6 +92,9 @@ class LatticeDynamics {
   /// @brief Dynamics of lattice (kept by reference; it must outlive this object). Masses start
   /// at 1 kg, areas at 0, nothing pinned, no wind.
   LatticeDynamics(FfdLattice& lattice, const DynamicsParams& p);
+  ~LatticeDynamics();
+  LatticeDynamics(const LatticeDynamics&) = delete;
+  LatticeDynamics& operator=(const LatticeDynamics&) = delete;
 
   /// @brief Replace the parameters; everything wakes if a parameter that moves vertices changed.
   void set_params(const DynamicsParams& p);
@@ -121,7 +141,7 @@ class LatticeDynamics {
   const std::vector<std::uint8_t>& spring_kinds() const { return kind_; }
 
  private:
-  struct Scratch;
+  struct Factor;
   void build_springs();
   double spring_k(int s) const;
   void wake_rings(std::vector<std::uint8_t>& flag, int rings) const;
@@ -136,6 +156,11 @@ class LatticeDynamics {
   void implicit_assemble(double h);
   void implicit_rhs(double h);
   int implicit_solve(double h);
+  bool use_ldlt() const;
+  void refresh_factor(double h);
+  void build_jacobi(double h);
+  void factor_pattern();
+  void factor_fill(double h);
   bool add_landings(double h);
   Eigen::Vector3d substep_drift(int v, double h) const;
   void apply_A(double h, const double* in, double* out);
@@ -146,7 +171,7 @@ class LatticeDynamics {
   void apply_bimetal(const Eigen::VectorXd& D, bool all);
   double bimetal_ratio(int s, double kappa) const;
   void remove_crumple_translation();
-  bool wake_stressed_sleepers(double dt);
+  int wake_stressed_sleepers(double dt);
   void update_sleep(double dt);
   Eigen::Vector3d supported(int v, Eigen::Vector3d f) const;
   void wake_around_forcing();
@@ -171,6 +196,9 @@ class LatticeDynamics {
   Eigen::VectorXd mass_, area_, heat_, heat_prev_, D_prev_, delta_;
   Eigen::Vector3d wind_{0, 0, 0};
   std::vector<std::uint8_t> pinned_, awake_, forced_;
+  std::vector<std::uint16_t> hold_;  // steps a flickering sleeper still stays awake
+  std::vector<std::int64_t> slept_at_;  // step at which each vertex last fell asleep
+  std::int64_t steps_ = 0;          // steps taken
   std::vector<int> active_, slot_;  // active vertices; slot_[v] = position in active_ or -1
   bool first_step_ = true;
   std::vector<std::uint8_t> mark_;  // scratch flags, all zero between uses
@@ -179,6 +207,9 @@ class LatticeDynamics {
   RowMatX3 x_save_, v_save_;        // active vertices' state at the start of a pass
   Eigen::VectorXd heat_save_;        // restored, with rest_save_, when a step throws
   std::vector<double> rest_save_;
+  std::unique_ptr<Factor> factor_;
+  int factorizations_ = 0;          // of the step in progress
+  bool precond_ldlt_ = false;       // the solve in progress uses factor_   // sparse factorization of the implicit system, reused
 };
 
 }  // namespace thinburn

@@ -454,8 +454,11 @@ def test_at_rest_everything_sleeps_and_stays_exactly_still():
     assert np.array_equal(lat.positions, x)
 
 
-def hot_spot(sleeping, M=24, frames=10):
-    lat, dyn = make(M, 0.0125, 0.002, sleeping=sleeping, has_floor=True, floor_z=-0.001)
+def hot_spot(sleeping, M=24, frames=10, wake_hold=0):
+    # wake_hold=0: each sleeper is judged afresh every step, so the awake set is the moving
+    # neighbourhood itself (the default hold keeps stressed sleepers awake a second longer).
+    lat, dyn = make(M, 0.0125, 0.002, sleeping=sleeping, has_floor=True, floor_z=-0.001,
+                    wake_hold=wake_hold)
     D, heat = zeros(M)
     c = (M // 2) * M + M // 2
     awake = []
@@ -491,6 +494,58 @@ def test_mass_change_wakes_and_keeps_velocity():
     assert dyn.awake.sum() == 1 and dyn.awake[5]
 
 
+# --- the implicit solve's preconditioners --------------------------------------------------------
+
+def crumpling_on_floor(preconditioner, frames=24, M=7, **params):
+    """A lattice resting on a floor while a growing D crumples it: moving vertices, contacts,
+    sleepers waking and falling asleep."""
+    lat, dyn = make(M, has_floor=True, floor_z=-0.0015, preconditioner=preconditioner, **params)
+    D, heat = zeros(M)
+    stats = []
+    for f in range(frames):
+        D[:] = 0.01 * f * np.sin(np.arange(M * M))
+        stats.append(dyn.step(1 / 24, D, heat))
+    return lat, dyn, stats
+
+
+def test_ldlt_and_jacobi_solve_the_same_system():
+    # Both stop the conjugate gradients at the same residual test on the same system. Each solve
+    # may leave a velocity error up to about cg_velocity_tolerance (1e-7 m/s); kept over the
+    # following frames it moves a vertex by at most frames^2 * dt * 1e-7 = 2.4e-6 m.
+    frames, dt = 24, 1 / 24
+    lat_l, _, st_l = crumpling_on_floor("ldlt", frames)
+    lat_j, _, st_j = crumpling_on_floor("jacobi", frames)
+    moved = np.abs(lat_j.positions - lat_j.rest).max()
+    assert moved > 1e-2
+    np.testing.assert_allclose(lat_l.positions, lat_j.positions, rtol=0, atol=frames**2 * dt * 1e-7)
+    factorizations = sum(s.factorizations for s in st_l)
+    assert factorizations > 0 and sum(s.factorizations for s in st_j) == 0
+    # The factor is kept over some solves, and it saves most of the iterations.
+    assert factorizations < sum(s.substeps * s.passes for s in st_l)
+    assert sum(s.cg_iterations for s in st_l) < 0.2 * sum(s.cg_iterations for s in st_j)
+
+
+def test_a_fresh_factorization_is_exact():
+    # refactor_iterations=0 refactors before every solve but the first's follow-ups; a solve
+    # that starts from a fresh factor of its own matrix is P = A^-1: one iteration suffices.
+    M = 5
+    lat, dyn = make(M, preconditioner="ldlt", refactor_iterations=0, sleeping=False, gravity=[0, 0, -9.81])
+    D, heat = zeros(M)
+    for f in range(6):
+        D[:] = 0.02 * f * np.cos(np.arange(M * M))
+        st = dyn.step(1 / 24, D, heat)
+        assert st.factorizations == st.substeps  # one per solve: no contacts, no passes
+        assert st.cg_iterations <= st.substeps
+
+
+def test_wake_hold_keeps_stressed_sleepers_awake():
+    # Without a hold, sleepers at the edge of the crumpling region fall asleep and are stressed
+    # awake again, redoing steps; the hold cuts the redone passes.
+    _, _, free = crumpling_on_floor("auto", frames=48, wake_hold=0)
+    _, _, held = crumpling_on_floor("auto", frames=48, wake_hold=24)
+    assert sum(s.passes for s in held) <= sum(s.passes for s in free)
+
+
 # --- parameters and validation --------------------------------------------------------------------
 
 def test_params_round_trip_and_presets():
@@ -518,6 +573,12 @@ def test_bad_input_names_the_argument():
         _core.LatticeDynamics(lat, sleeping=1)
     with pytest.raises(TypeError, match="c_damping"):
         _core.LatticeDynamics(lat, c_damping=True)
+    with pytest.raises(ValueError, match="preconditioner"):
+        _core.LatticeDynamics(lat, preconditioner="lu")
+    with pytest.raises(ValueError, match="wake_hold"):
+        _core.LatticeDynamics(lat, wake_hold=-1)
+    with pytest.raises(ValueError, match="refactor_iterations"):
+        _core.LatticeDynamics(lat, refactor_iterations=-2)
     dyn = _core.LatticeDynamics(lat)
     D, heat = zeros(M)
     with pytest.raises(ValueError, match="D must have"):

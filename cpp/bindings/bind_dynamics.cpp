@@ -25,6 +25,16 @@ Integrator parse_integrator(const py::handle& h) {
                               s + "'");
 }
 
+Preconditioner parse_preconditioner(const py::handle& h) {
+  if (py::isinstance<Preconditioner>(h)) return h.cast<Preconditioner>();
+  if (!py::isinstance<py::str>(h)) throw py::type_error("preconditioner must be a str or Preconditioner");
+  const std::string s = h.cast<std::string>();
+  if (s == "auto") return Preconditioner::Auto;
+  if (s == "ldlt") return Preconditioner::Ldlt;
+  if (s == "jacobi") return Preconditioner::Jacobi;
+  throw std::invalid_argument("preconditioner must be 'auto', 'ldlt' or 'jacobi', got '" + s + "'");
+}
+
 double as_double(const std::string& key, const py::handle& h) {
   if (py::isinstance<py::bool_>(h) || !(py::isinstance<py::float_>(h) || py::isinstance<py::int_>(h) ||
                                         py::hasattr(h, "__float__")))
@@ -73,6 +83,9 @@ void apply_kwargs(DynamicsParams& p, const py::kwargs& kw) {
     int* ifield = k == "substeps"            ? &p.substeps
                   : k == "max_substeps"      ? &p.max_substeps
                   : k == "cg_max_iterations" ? &p.cg_max_iterations
+                  : k == "ldlt_max_vertices" ? &p.ldlt_max_vertices
+                  : k == "refactor_iterations" ? &p.refactor_iterations
+                  : k == "wake_hold" ? &p.wake_hold
                                              : nullptr;
     if (dfield)
       *dfield = as_double(k, v);
@@ -82,6 +95,8 @@ void apply_kwargs(DynamicsParams& p, const py::kwargs& kw) {
       *ifield = as_int(k, v);
     else if (k == "integrator")
       p.integrator = parse_integrator(v);
+    else if (k == "preconditioner")
+      p.preconditioner = parse_preconditioner(v);
     else if (k == "gravity") {
       const auto g = v.cast<std::vector<double>>();
       if (g.size() != 3) throw std::invalid_argument("gravity must have 3 components");
@@ -94,6 +109,7 @@ void apply_kwargs(DynamicsParams& p, const py::kwargs& kw) {
 
 py::dict params_dict(const DynamicsParams& p) {
   const char* names[] = {"explicit", "symplectic", "implicit"};
+  const char* preconditioners[] = {"auto", "ldlt", "jacobi"};
   return py::dict("k_structure"_a = p.k_structure, "k_shear"_a = p.k_shear, "k_flex"_a = p.k_flex,
                   "k_thickness"_a = p.k_thickness, "k_transverse"_a = p.k_transverse,
                   "stiffness_unit"_a = p.stiffness_unit,
@@ -109,7 +125,10 @@ py::dict params_dict(const DynamicsParams& p) {
                   "max_substeps"_a = p.max_substeps, "safety"_a = p.safety,
                   "max_stretch"_a = p.max_stretch, "cg_tolerance"_a = p.cg_tolerance,
                   "cg_velocity_tolerance"_a = p.cg_velocity_tolerance,
-                  "cg_max_iterations"_a = p.cg_max_iterations);
+                  "cg_max_iterations"_a = p.cg_max_iterations,
+                  "preconditioner"_a = preconditioners[int(p.preconditioner)],
+                  "ldlt_max_vertices"_a = p.ldlt_max_vertices,
+                  "refactor_iterations"_a = p.refactor_iterations, "wake_hold"_a = p.wake_hold);
 }
 
 std::vector<std::uint8_t> as_flags(const py::array_t<std::uint8_t, py::array::forcecast>& a) {
@@ -131,15 +150,20 @@ void apply_dynamics_kwargs(DynamicsParams& p, const py::dict& kw) {
 py::dict dynamics_params_dict(const DynamicsParams& p) { return params_dict(p); }
 
 void define_dynamics(py::module_& m) {
+  py::enum_<Preconditioner>(m, "Preconditioner", "Preconditioner of the implicit integrator's conjugate gradients.")
+      .value("Auto", Preconditioner::Auto)
+      .value("Ldlt", Preconditioner::Ldlt)
+      .value("Jacobi", Preconditioner::Jacobi);
   py::enum_<Integrator>(m, "Integrator", "Time integrator of the lattice.")
       .value("Explicit", Integrator::Explicit, "The paper's eqs 13-15.")
       .value("Symplectic", Integrator::Symplectic, "Symplectic Euler.")
-      .value("Implicit", Integrator::Implicit, "Backward Euler with conjugate gradients.");
+      .value("Implicit", Integrator::Implicit, "Backward Euler, a linear solve per substep.");
 
   py::class_<StepStats>(m, "StepStats", "What one step did.")
       .def_readonly("substeps", &StepStats::substeps)
       .def_readonly("awake", &StepStats::awake, "Vertices integrated.")
       .def_readonly("cg_iterations", &StepStats::cg_iterations)
+      .def_readonly("factorizations", &StepStats::factorizations, "Sparse LDL^T factorizations (Ldlt preconditioner).")
       .def_readonly("omega_max", &StepStats::omega_max, "rad/s, bound on the largest frequency.")
       .def_readonly("passes", &StepStats::passes)
       .def("__repr__", [](const StepStats& s) {

@@ -18,7 +18,8 @@ CRUMPLE_REFERENCE_K = 0.05  # Table 1's K_structure for paper: its crumple gain 
 # docs/bending.md for units and meanings.
 DYNAMICS_KEYS = ("k_thickness", "k_transverse", "stiffness_unit", "buoyancy", "wind_drag", "friction",
                  "crumple_gain", "plasticity", "crumple_momentum", "bimetal", "sleep_speed", "sleeping", "substeps", "max_substeps",
-                 "safety", "max_stretch", "cg_tolerance", "cg_max_iterations", "gravity")
+                 "safety", "max_stretch", "cg_tolerance", "cg_max_iterations", "gravity",
+                 "preconditioner", "ldlt_max_vertices", "refactor_iterations", "wake_hold")
 BENDING_KEYS = ("ct", "alpha", "beta", "d_min", "max_rotation", "heat_tolerance", "heat_fast")
 PARTICLE_PREFIX = "particle_"
 PARTICLE_KEYS = ("capacity", "birth_rate", "temperature0", "cooling", "lifetime", "lifetime_jitter",
@@ -73,7 +74,11 @@ class Simulation:
           ``bimetal`` (default True: D shrinks the heated face's springs, docs/dynamics.md §2;
           False: the paper's prescribed chord motion), ``sleep_speed``,
           ``sleeping``, ``substeps``, ``max_substeps``, ``safety``, ``max_stretch``,
-          ``cg_tolerance``, ``cg_max_iterations``, ``gravity``;
+          ``cg_tolerance``, ``cg_max_iterations``, ``gravity``, ``preconditioner`` of the implicit
+          solve's conjugate gradients ("auto", the default: a sparse LDL^T factorization, kept
+          while it stays good, up to ``ldlt_max_vertices`` awake lattice vertices, couple-block
+          Jacobi above; "ldlt"; "jacobi"), ``refactor_iterations``, ``wake_hold`` (steps a
+          vertex woken by its neighbours' motion stays awake);
         * the particles, prefixed ``particle_``: ``particle_capacity``,
           ``particle_birth_rate``, ``particle_temperature0``, ``particle_cooling``,
           ``particle_lifetime``, ``particle_lifetime_jitter``, ``particle_buoyancy``,
