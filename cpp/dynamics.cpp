@@ -146,6 +146,8 @@ LatticeDynamics::LatticeDynamics(FfdLattice& lattice, const DynamicsParams& p)
   x_save_ = RowMatX3::Zero(n_, 3);
   v_save_ = RowMatX3::Zero(n_, 3);
   mass_ = Eigen::VectorXd::Ones(n_);
+  strength_ = Eigen::VectorXd::Ones(n_);
+  spring_scale_.assign(sa_.size(), 1.0);
   area_ = heat_ = heat_prev_ = Eigen::VectorXd::Zero(n_);
   D_prev_ = delta_ = Eigen::VectorXd::Zero(M_ * M_);
   pinned_.assign(n_, 0);
@@ -295,7 +297,19 @@ void LatticeDynamics::build_springs() {
 
 double LatticeDynamics::spring_k(int s) const {
   const double c[5] = {p_.k_structure, p_.k_shear, p_.k_flex, p_.k_thickness, p_.k_transverse};
-  return c[kind_[s]] * p_.stiffness_unit;
+  return c[kind_[s]] * p_.stiffness_unit * spring_scale_[s];
+}
+
+void LatticeDynamics::set_strength(const Eigen::VectorXd& s) {
+  require(s.size() == n_, "strength must have 2*M*M = " + std::to_string(n_) + " entries, got " +
+                              std::to_string(s.size()));
+  for (int v = 0; v < n_; ++v)
+    require(std::isfinite(s(v)) && s(v) >= 0.0 && s(v) <= 1.0,
+            "strength must be in [0, 1] (entry " + std::to_string(v) + ")");
+  for (int v = 0; v < n_; ++v)
+    if (s(v) != strength_(v)) awake_[v] = 1;
+  strength_ = s;
+  for (std::size_t q = 0; q < sa_.size(); ++q) spring_scale_[q] = 0.5 * (s(sa_[q]) + s(sb_[q]));
 }
 
 void LatticeDynamics::set_params(const DynamicsParams& p) {

@@ -104,6 +104,12 @@ class LatticeDynamics {
   void set_masses(const Eigen::VectorXd& m);
   /// @brief m^2 of sheet mapped to each control vertex (>= 0), for the wind pressure.
   void set_areas(const Eigen::VectorXd& a);
+  /// @brief Per control vertex, in [0, 1]: the share of its springs' stiffness the material
+  /// there keeps (1 intact, less where it burnt to ash). A spring takes the mean of its two ends;
+  /// vertices whose strength changed wake.
+  void set_strength(const Eigen::VectorXd& s);
+  /// @brief Per control vertex: the stiffness share set by set_strength (1 at first).
+  const Eigen::VectorXd& strength() const { return strength_; }
   /// @brief Per control vertex; pinned ones never move.
   void set_pinned(const std::vector<std::uint8_t>& pinned);
   /// @brief Wind velocity, m/s.
@@ -183,6 +189,8 @@ class LatticeDynamics {
   std::vector<int> sa_, sb_;
   std::vector<std::uint8_t> kind_;
   std::vector<double> rest_len_;
+  std::vector<double> spring_scale_;  // per spring: stiffness share kept (set_strength), 1 intact
+  Eigen::VectorXd strength_;
   std::vector<double> base_len_;      // rest lengths of the rest lattice (bimetal scales them)
   std::vector<double> mid_sep_;       // per spring: rest distance between its couples' centres
   std::vector<double> off_a_, off_b_; // per spring: its ends' offsets from the mid-surface (+ top)

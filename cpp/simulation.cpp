@@ -30,6 +30,7 @@ Simulation::Simulation(const RowMatX3& vertices, const RowMatX3i& faces, const R
       front_(params.cells, params.cells, sheet_.dv(), sheet_.du(), params.front) {
   if (!(params.v0 > 0)) throw std::invalid_argument("v0 must be > 0");
   if (!(params.burn_duration > 0)) throw std::invalid_argument("burn_duration must be > 0");
+  if (!(params.ash_strength >= 0 && params.ash_strength <= 1)) throw std::invalid_argument("ash_strength must be in [0, 1]");
   const int nc = sheet_.num_cells();
   front_.set_inside(sheet_.inside());
   state_.assign(nc, kUnburnt);
@@ -174,7 +175,10 @@ void Simulation::retire_burnt() {
   for (int c : burning_) {
     if (arrival[c] + duration_[c] <= time_) {
       state_[c] = kBurnt;
-      if (lattice_) add_cell_mass(c, -(1.0 - keep) * mass_[c]);
+      if (lattice_) {
+        add_cell_mass(c, -(1.0 - keep) * mass_[c]);
+        add_burnt_area(c);
+      }
       mass_[c] *= keep;
     } else {
       burning_[w++] = c;

@@ -38,6 +38,7 @@ struct SimulationParams {
   // Mass: burnt cells lose mass and turn to ash.
   double areal_density = 0.045;  ///< kg/m^2
   double ash_fraction = 0.1;     ///< share of the mass a burnt cell keeps
+  double ash_strength = 0.1;     ///< share of the lattice springs' stiffness burnt sheet keeps
   // The shell: lattice, particles, bending and motion (paper §4). Off: the sheet keeps its rest shape.
   bool shell = true;
   int lattice = 0;               ///< M couples per side; 0 chooses from the sheet's size and N
@@ -115,6 +116,7 @@ class Simulation {
   void bilinear_couples(double s, double t, int* couple, double* w) const;
   void cell_couples(int cell, int* couple, double* w) const;
   void add_cell_mass(int cell, double dm);
+  void add_burnt_area(int cell);
   void step_shell(double dt);
   void emit_particles(double dt);
   void update_pyrolysis();
@@ -142,8 +144,9 @@ class Simulation {
   std::unique_ptr<ParticleSystem> particles_;
   std::unique_ptr<Bending> bending_;
   Embedding vertex_embedding_;
-  Eigen::VectorXd control_mass_, control_area_;
+  Eigen::VectorXd control_mass_, control_area_, burnt_area_;
   bool mass_dirty_ = false;
+  bool strength_dirty_ = false;
   StepStats stats_;
   RowMatX3 emit_pos_, emit_normal_, ignition_pts_, particle_pos_;
   Eigen::VectorXd emit_len_, particle_temp_, rotation_, applied_rotation_;

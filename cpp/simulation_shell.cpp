@@ -81,6 +81,7 @@ void Simulation::build_shell(const std::vector<std::uint8_t>& pinned) {
   // Cell masses and areas onto the couples, half to each layer.
   control_mass_ = Eigen::VectorXd::Zero(2 * M_ * M_);
   control_area_ = Eigen::VectorXd::Zero(2 * M_ * M_);
+  burnt_area_ = Eigen::VectorXd::Zero(2 * M_ * M_);
   for (int c = 0; c < N * N; ++c) {
     if (!sheet_.inside()[c]) continue;
     add_cell_mass(c, mass_[c]);
@@ -134,6 +135,15 @@ void Simulation::add_cell_mass(int cell, double dm) {
     control_mass_[2 * cp[k] + 1] += 0.5 * w[k] * dm;
   }
   mass_dirty_ = true;
+}
+
+void Simulation::add_burnt_area(int cell) {
+  int cp[4];
+  double w[4];
+  cell_couples(cell, cp, w);
+  for (int k = 0; k < 4; ++k)
+    for (int layer = 0; layer < 2; ++layer) burnt_area_[2 * cp[k] + layer] += 0.5 * w[k] * sheet_.du() * sheet_.dv();
+  strength_dirty_ = true;
 }
 
 void Simulation::set_dynamics_params(const DynamicsParams& p) {
@@ -194,6 +204,17 @@ void Simulation::step_shell(double dt) {
     const double floor_mass = 1e-3 * control_mass_.maxCoeff();
     dynamics_->set_masses(control_mass_.cwiseMax(floor_mass));
     mass_dirty_ = false;
+  }
+  if (strength_dirty_) {
+    // Ash holds little together (Fig. 9's cloth sinks as it burns): a control vertex keeps
+    // ash_strength of its springs' stiffness over the burnt share of the sheet it carries.
+    Eigen::VectorXd strength(control_area_.size());
+    for (Eigen::Index v = 0; v < strength.size(); ++v) {
+      const double burnt = control_area_[v] > 0 ? std::min(1.0, burnt_area_[v] / control_area_[v]) : 0.0;
+      strength[v] = 1.0 - (1.0 - params_.ash_strength) * burnt;
+    }
+    dynamics_->set_strength(strength);
+    strength_dirty_ = false;
   }
   dynamics_->set_wind(wind_);
   bending_->rotation(rotation_);

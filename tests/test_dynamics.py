@@ -546,6 +546,30 @@ def test_wake_hold_keeps_stressed_sleepers_awake():
     assert sum(s.passes for s in held) <= sum(s.passes for s in free)
 
 
+def test_strength_scales_each_spring_by_the_mean_of_its_ends():
+    # K is linear in the spring constants: a uniform strength s scales it by s exactly, and
+    # strengths s_a, s_b scale the spring between them by (s_a + s_b) / 2.
+    M = 4
+    lat, dyn = make(M)
+    lat.positions = lat.rest + np.random.default_rng(3).normal(scale=1e-3, size=lat.rest.shape)
+    K1 = dyn.stiffness_matrix()  # dense
+    dyn.set_strength(np.full(2 * M * M, 0.3))
+    K = dyn.stiffness_matrix()
+    np.testing.assert_allclose(K, 0.3 * K1, rtol=1e-12, atol=1e-12 * np.abs(K1).max())
+    s = np.ones(2 * M * M)
+    s[0] = 0.0  # vertex 0's springs keep half their stiffness
+    dyn.set_strength(s)
+    K = dyn.stiffness_matrix()
+    # The off-diagonal block between vertex 0 and a neighbour is that spring's -J: halved.
+    j = 2  # vertex 2 = couple (0, 1) bottom, a structure neighbour of vertex 0
+    np.testing.assert_allclose(K[0:3, 3 * j:3 * j + 3], 0.5 * K1[0:3, 3 * j:3 * j + 3], rtol=1e-12)
+    assert np.array_equal(dyn.strength, s)
+    with pytest.raises(ValueError, match="strength"):
+        dyn.set_strength(np.full(2 * M * M, 1.5))
+    with pytest.raises(ValueError, match="strength"):
+        dyn.set_strength(np.ones(3))
+
+
 # --- parameters and validation --------------------------------------------------------------------
 
 def test_params_round_trip_and_presets():

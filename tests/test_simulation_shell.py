@@ -106,6 +106,16 @@ def test_burnt_cells_lighten_the_lattice(square):
     assert full - sim.control_masses().sum() == pytest.approx(lost, rel=1e-9)
 
 
+def test_burnt_sheet_keeps_ash_strength_of_the_lattice_stiffness(square):
+    sim = thinburn.Simulation(*square, cells=32, lattice=5, floor=0.0, ash_strength=0.25, **QUIET)
+    assert np.array_equal(sim.control_strength(), np.ones((5, 5, 2)))
+    sim.ignite((0.1, 0.1, 0.0), radius=0.3)  # every cell at once
+    sim.run(sim.burn_durations().max() + 0.5, dt=0.25)
+    assert (sim.cell_states() == 2).all()
+    # Every couple carries only burnt sheet now: strength = 1 - (1 - 0.25) * 1.
+    np.testing.assert_allclose(sim.control_strength(), 0.25, rtol=1e-12)
+
+
 def test_heat_reaches_the_lattice_and_bends_it(a4):
     v, f = a4
     sim = thinburn.Simulation(v, f, cells=48, floor=0.0)

@@ -194,6 +194,10 @@ void define_dynamics(py::module_& m) {
       .def_property_readonly("params", [](const LatticeDynamics& s) { return params_dict(s.params()); })
       .def("set_masses", &LatticeDynamics::set_masses, "masses"_a,
            "kg per control vertex (> 0); vertices whose mass changed wake.")
+      .def("set_strength", &LatticeDynamics::set_strength, "strength"_a,
+           "Per control vertex, in [0, 1]: the share of its springs' stiffness kept (a spring takes "
+           "the mean of its ends); changed vertices wake.")
+      .def_property_readonly("strength", &LatticeDynamics::strength, "Per control vertex: the stiffness share kept.")
       .def("set_areas", &LatticeDynamics::set_areas, "areas"_a,
            "m^2 of sheet mapped to each control vertex (>= 0), for the wind pressure.")
       .def(

@@ -66,6 +66,7 @@ void define_params(py::module_& m) {
       .def_readwrite("max_drive", &SimulationParams::max_drive)
       .def_readwrite("areal_density", &SimulationParams::areal_density)
       .def_readwrite("ash_fraction", &SimulationParams::ash_fraction)
+      .def_readwrite("ash_strength", &SimulationParams::ash_strength)
       .def_readwrite("shell", &SimulationParams::shell)
       .def_readwrite("lattice", &SimulationParams::lattice)
       .def_readwrite("lattice_thickness", &SimulationParams::lattice_thickness)
@@ -160,6 +161,7 @@ void define_simulation(py::module_& m) {
       .def("lattice_positions", &S::lattice_positions)
       .def("lattice_rest_positions", [](const S& s) { return s.lattice() ? s.lattice()->rest() : RowMatX3(0, 3); })
       .def("control_masses", &S::control_masses)
+      .def("control_strength", [](const S& s) { return s.dynamics() ? s.dynamics()->strength() : Eigen::VectorXd(); })
       .def("heat", [](const S& s) { return s.bending() ? s.bending()->heat() : Eigen::VectorXd(); })
       .def("pyrolysis", [](const S& s) { return s.bending() ? s.bending()->pyrolysis() : Eigen::VectorXd(); })
       .def("rotation", [](const S& s) {

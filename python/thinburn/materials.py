@@ -36,6 +36,7 @@ class Material:
     speed_noise: float = 0.15     # relative jitter of V0, smooth over ~10 cells (organic fronts)
     duration_noise: float = 0.2   # relative per-cell jitter of the burn duration
     ash_fraction: float = 0.1     # share of its mass a burnt cell keeps as ash
+    ash_strength: float = 0.1     # share of the lattice's stiffness burnt sheet keeps (Fig. 9)
     alpha: float = 1.0            # eq 6: radians of rotation per unit heat difference
     beta: float = 1e-3            # eq 6: radians per unit pyrolysis difference (1/m)
 

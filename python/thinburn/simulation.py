@@ -35,6 +35,7 @@ _PARAM_BOUNDS = {
     "wind_spread": dict(low=0.0),
     "max_drive": dict(low=0.0, high=0.95),
     "ash_fraction": dict(low=0.0, high=1.0),
+    "ash_strength": dict(low=0.0, high=1.0),
 }
 
 
@@ -66,7 +67,9 @@ class Simulation:
 
         * the fire: ``cv``, ``v_floor``, ``speed_noise``, ``duration_noise``, ``climb``
           (flames climb: drive toward world-up, 0 = the paper's symmetric law),
-          ``wind_spread`` (front drive per m/s of wind), ``max_drive``, ``ash_fraction``;
+          ``wind_spread`` (front drive per m/s of wind), ``max_drive``, ``ash_fraction``,
+          ``ash_strength`` (share of the lattice's stiffness that burnt sheet keeps, 0.1: ash
+          holds little together, so a held cloth sinks as it burns, Fig. 9);
         * the bending (eqs 2-6): ``ct``, ``alpha``, ``beta``, ``d_min``, ``max_rotation``,
           ``heat_tolerance``, ``heat_fast``;
         * the motion: ``k_thickness``, ``k_transverse``, ``stiffness_unit``, ``buoyancy``,
@@ -158,6 +161,7 @@ class Simulation:
         p.duration_noise = V.real(mat.duration_noise, "material.duration_noise", low=0.0, high=0.9)
         p.areal_density = V.real(mat.areal_density, "material.mass", low=0.0, low_open=True)
         p.ash_fraction = V.real(mat.ash_fraction, "material.ash_fraction", low=0.0, high=1.0)
+        p.ash_strength = V.real(mat.ash_strength, "material.ash_strength", low=0.0, high=1.0)
         for key, value in overrides.items():
             if key not in _PARAM_BOUNDS:
                 known = sorted(_PARAM_BOUNDS) + list(DYNAMICS_KEYS) + list(BENDING_KEYS) + [
@@ -257,6 +261,12 @@ class Simulation:
         """(M, M, 2) sheet mass mapped onto each control vertex, kg (falls as cells burn)."""
         m = self._require_shell("control_masses")
         return self._sim.control_masses().reshape(m, m, 2)
+
+    def control_strength(self) -> np.ndarray:
+        """(M, M, 2) share of the lattice springs' stiffness each control vertex keeps: 1 where
+        the sheet is intact, down to ash_strength where all it carries burnt."""
+        m = self._require_shell("control_strength")
+        return self._sim.control_strength().reshape(m, m, 2)
 
     def particles(self):
         """(positions (k, 3), temperatures (k,)) of the live fire particles."""
