@@ -61,6 +61,47 @@ double checked_param(double x, double hi, const char* what, Eigen::Index row) {
   return std::clamp(x, 0.0, hi);
 }
 
+// Deformed positions from the per-couple displacement table: 8 doubles per couple, bottom
+// (x, y, z, 0) then top (x, y, z, 0), so each layer is two SIMD pairs. Each point reads its own
+// stencil and writes its own row, summing w * ((1 - r) * d_bottom + r * d_top) in stencil order
+// from zero before adding the rest point: the result does not depend on the thread count.
+// Returns true when a couple index is out of range (couple 0 stands in; the caller throws).
+template <int St>
+bool deform_points(const Embedding& e, const double* table, int couples, Eigen::Ref<RowMatX3>& out) {
+  using Pad4 = Eigen::Array4d;
+  const Eigen::Index n = e.size();
+  const std::int32_t* couple = e.couple.data();
+  const double* weight = e.weight.data();
+  const double* r_of = e.r.data();
+  const double* rest = e.rest.data();
+  double* dst = out.data();
+  const Eigen::Index stride = out.outerStride();
+  const auto limit = static_cast<std::uint32_t>(couples);
+  bool bad = false;
+#ifdef THINBURN_HAVE_OPENMP
+#pragma omp parallel for num_threads(thinburn::num_threads()) schedule(static) reduction(|| : bad)
+#endif
+  for (Eigen::Index p = 0; p < n; ++p) {
+    const double r = r_of[p], s = 1.0 - r;
+    Pad4 acc = Pad4::Zero();
+    bool ok = true;
+    for (int q = 0; q < St; ++q) {
+      std::uint32_t c = static_cast<std::uint32_t>(couple[p * St + q]);
+      ok &= c < limit;
+      c = c < limit ? c : 0;
+      const double w = weight[p * St + q];
+      const double* d = table + 8 * std::size_t(c);
+      acc += w * (s * Eigen::Map<const Pad4>(d) + r * Eigen::Map<const Pad4>(d + 4));
+    }
+    bad |= !ok;
+    double* o = dst + p * stride;
+    o[0] = rest[3 * p] + acc[0];
+    o[1] = rest[3 * p + 1] + acc[1];
+    o[2] = rest[3 * p + 2] + acc[2];
+  }
+  return bad;
+}
+
 }  // namespace
 
 FfdLattice::FfdLattice(int M, const RowMatX3& rest) : M_(M), rest_(rest), pos_(rest) {
@@ -110,24 +151,22 @@ void FfdLattice::deform(const Embedding& e, Eigen::Ref<RowMatX3> out) const {
   if (out.rows() != n)
     throw std::invalid_argument("out must have " + std::to_string(n) + " rows, got " +
                                 std::to_string(out.rows()));
-  for (std::int32_t c : e.couple)
-    if (c < 0 || c >= M_ * M_) throw std::invalid_argument("embedding does not fit this lattice");
-  const int st = e.stencil;
-#ifdef THINBURN_HAVE_OPENMP
-#pragma omp parallel for num_threads(thinburn::num_threads()) schedule(static)
-#endif
-  for (Eigen::Index p = 0; p < n; ++p) {
-    const double r = e.r(p);
-    // Displacements, not positions, are interpolated: at rest every term is exactly zero.
-    Eigen::RowVector3d disp = Eigen::RowVector3d::Zero();
-    for (int q = 0; q < st; ++q) {
-      const std::size_t slot = std::size_t(p) * st + q;
-      const int c = e.couple[slot];
-      disp += e.weight[slot] * ((1.0 - r) * (pos_.row(2 * c) - rest_.row(2 * c)) +
-                                r * (pos_.row(2 * c + 1) - rest_.row(2 * c + 1)));
+  if (e.couple.size() != std::size_t(n) * e.stencil || e.weight.size() != e.couple.size() ||
+      e.rest.rows() != n || (e.stencil != 4 && e.stencil != 9))
+    throw std::invalid_argument("embedding is inconsistent (stencil, couples, weights, rest)");
+  // Each control vertex's displacement once per call, not once per point that uses it. The
+  // buffer belongs to the calling thread: concurrent deforms (the GIL is released) never share it.
+  thread_local std::vector<double> table;
+  const int couples = M_ * M_;
+  table.resize(8 * std::size_t(couples));
+  for (int c = 0; c < couples; ++c)
+    for (int k = 0; k < 2; ++k) {
+      for (int d = 0; d < 3; ++d) table[8 * c + 4 * k + d] = pos_(2 * c + k, d) - rest_(2 * c + k, d);
+      table[8 * c + 4 * k + 3] = 0.0;
     }
-    out.row(p) = e.rest.row(p) + disp;
-  }
+  const bool bad = e.stencil == 4 ? deform_points<4>(e, table.data(), couples, out)
+                                  : deform_points<9>(e, table.data(), couples, out);
+  if (bad) throw std::invalid_argument("embedding does not fit this lattice");
 }
 
 Eigen::VectorXd FfdLattice::scatter(const Embedding& e, const Eigen::VectorXd& values) const {

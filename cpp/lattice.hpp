@@ -45,7 +45,11 @@ class FfdLattice {
                   LatticeInterp interp = LatticeInterp::Trilinear) const;
 
   /// @brief Deformed positions of embedded points (n x 3, preallocated) from the current
-  /// control positions: parallel over points, no allocation.
+  /// control positions. Each control vertex's displacement is computed once per call into a
+  /// table owned by the calling thread (allocated on its first call, reused after); then
+  /// parallel over points, bit-identical for any thread count. Throws std::invalid_argument
+  /// when out has the wrong size or the embedding does not fit the lattice (out is then
+  /// partly written).
   void deform(const Embedding& e, Eigen::Ref<RowMatX3> out) const;
 
   /// @brief Spread per-point values onto the control vertices with the embedding's weights

@@ -33,3 +33,19 @@ def set_threads(n: int | None) -> int:
 def get_threads() -> int:
     """The number of threads the core uses now."""
     return int(_core.num_threads())
+
+
+MIN_BANDWIDTH_BYTES = 3 * 8 * 1024
+
+
+def measure_memory_bandwidth(bytes: int = 768 * 2**20, repeat: int = 5) -> float:
+    """Machine probe: sustained memory bandwidth in bytes/s on the core's current threads.
+
+    A STREAM-style triad a = b + s·c over three float64 arrays of ``bytes`` in all (default
+    768 MiB, several times any last-level cache), fastest of ``repeat`` passes, counted as
+    STREAM counts it: 24 bytes per element (two reads, one write). Releases the GIL.
+    """
+    from . import _validate as V
+    n = V.integer(bytes, "bytes", low=MIN_BANDWIDTH_BYTES)
+    r = V.integer(repeat, "repeat", low=1)
+    return float(_core.measure_memory_bandwidth(n, r))
