@@ -11,6 +11,10 @@ namespace thinburn {
 namespace {
 
 constexpr double kParamSlack = 1e-9;
+// Below this many points deform runs on one thread: the work (about 10-20 ns a point) is then
+// shorter than waking the team, and a team member the OS has descheduled (a busy machine)
+// would stall the whole call.
+constexpr Eigen::Index kParallelPoints = 4096;
 
 // Weights of one lattice axis at coordinate x over the three nodes base, base+1, base+2
 // (base + 2 may be unused: weight 0). Linear: two nodes.
@@ -79,7 +83,8 @@ bool deform_points(const Embedding& e, const double* table, int couples, Eigen::
   const auto limit = static_cast<std::uint32_t>(couples);
   bool bad = false;
 #ifdef THINBURN_HAVE_OPENMP
-#pragma omp parallel for num_threads(thinburn::num_threads()) schedule(static) reduction(|| : bad)
+#pragma omp parallel for num_threads(thinburn::num_threads()) schedule(static) reduction(|| : bad) \
+    if (n >= kParallelPoints)
 #endif
   for (Eigen::Index p = 0; p < n; ++p) {
     const double r = r_of[p], s = 1.0 - r;

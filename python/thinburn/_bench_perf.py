@@ -308,6 +308,20 @@ def bench_active(sizes, modes, frames, warmup, repeat, threads, log):
 # ---------------------------------------------------------------- figures
 
 
+def _count(n) -> str:
+    """1026 -> '1.03k', 1e6 -> '1M'."""
+    return f"{n / 1e6:.3g}M" if n >= 1e6 else f"{n / 1e3:.3g}k"
+
+
+def _log_ticks(ax, values, labels):
+    """Log x axis with a labelled tick at each measured value and no minor labels."""
+    import matplotlib.ticker
+    ax.set_xscale("log")
+    ax.set_xticks(values)
+    ax.set_xticklabels(labels)
+    ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
+
+
 def _pyplot():
     import matplotlib
     matplotlib.use("Agg")
@@ -336,9 +350,10 @@ def plot_performance(rows, path):
         ax.axhline(mr[0]["bound_vertices_per_second"], color=f"C{j}", ls="--", lw=1,
                    label=f"{m} bound = bandwidth / {mr[0]['bytes_per_point']} B")
         ax.annotate(f"{100 * mr[-1]['fraction']:.0f} % of bound", (n[-1], mr[-1]["vertices_per_second"]),
-                    xytext=(-10, -14), textcoords="offset points", ha="right", fontsize=8, color=f"C{j}")
+                    xytext=(6, -3), textcoords="offset points", ha="left", fontsize=8, color=f"C{j}")
     ax.set_xscale("log")
     ax.set_yscale("log")
+    ax.margins(x=0.25)
     ax.set_xlabel("embedded points n")
     ax.set_ylabel("vertices per second")
     title = "FFD deform throughput vs memory-bandwidth bound"
@@ -392,12 +407,14 @@ def plot_scaling(rows, path):
             lab = f" (slope {fit['positions_slope']:.2f})" if fit else ""
             ax.plot(x, [r["positions_ms"] for r in sub], "s--", label="of which vertex_positions (FFD)" + lab)
             for r, xv in zip(sub, x):
-                note = (f"N={r['resolution']} M={r['lattice']}\nfront {r['front_active']:.0f} "
-                        f"awake {r['awake']:.0f}" if kind == "cells" else f"M={r['lattice']}")
-                ax.annotate(note, (xv, r["ms_per_frame"]), fontsize=6, xytext=(3, 4),
+                note = (f"M={r['lattice']}, front {r['front_active']:.0f}\nawake {r['awake']:.0f}"
+                        if kind == "cells" else f"M={r['lattice']}")
+                ax.annotate(note, (xv, r["ms_per_frame"]), fontsize=6, xytext=(4, 4),
                             textcoords="offset points")
-        ax.set_xscale("log")
+            _log_ticks(ax, x, [f"{r['resolution']}²" if kind == "cells" else _count(r["vertices"])
+                               for r in sub])
         ax.set_yscale("log")
+        ax.margins(x=0.15, y=0.2)
         ax.set_xlabel(xlabel)
         ax.set_ylabel("ms per frame")
         ax.set_title(f"per-frame cost vs {kind}", fontsize=9)
@@ -413,13 +430,16 @@ def plot_scaling(rows, path):
         for r in sub:
             ax.annotate(f"M={r['lattice']}\nwork {r['mean_work']:.3g}", (r["cells"], r["ms_per_frame"]),
                         fontsize=6, xytext=(3, 4), textcoords="offset points", color=f"C{j}")
+    for j, mode in enumerate(modes):
+        sub = [r for r in act if r["method"] == mode]
+        cs = np.array([r["cells"] for r in sub], dtype=float)
+        ax.plot(cs, sub[0]["ms_per_frame"] * cs / cs[0], ":", color=f"C{j}", lw=1,
+                label="∝ N² from the first point" if j == 0 else None)
     if act:
-        c0 = min(r["cells"] for r in act)
-        cs = np.array(sorted({r["cells"] for r in act}), dtype=float)
-        ref = min(r["ms_per_frame"] for r in act if r["cells"] == c0)
-        ax.plot(cs, ref * cs / c0, "k:", lw=1, label="∝ N² (reference)")
-    ax.set_xscale("log")
+        sizes = sorted({r["resolution"] for r in act})
+        _log_ticks(ax, [n * n for n in sizes], [f"{n}²" for n in sizes])
     ax.set_yscale("log")
+    ax.margins(x=0.15, y=0.15)
     ax.set_xlabel("cells N² (1 m sheet, same 1 cm fire)")
     ax.set_ylabel("ms per frame")
     ax.set_title("small fire on a large sheet: per-frame cost", fontsize=9)
@@ -431,13 +451,12 @@ def plot_scaling(rows, path):
         base = sub[0]["ms_per_unit_work"]
         ax.plot([r["resolution"] for r in sub], [r["ms_per_unit_work"] / base for r in sub], "o-",
                 color=f"C{j}", label=f"{mode}: ms / ({sub[0]['work']})")
-    ax.set_xscale("log", base=2)
     ax.set_yscale("log")
     if act:
         ns = np.array(sorted({r["resolution"] for r in act}), dtype=float)
         ax.plot(ns, (ns / ns[0]) ** 2, "k:", lw=1, label="N² / N₀² (cost that followed the cells)")
-        ax.set_xticks(ns)
-        ax.set_xticklabels([f"{int(n)}" for n in ns])
+        _log_ticks(ax, ns, [f"{int(n)}" for n in ns])
+    ax.margins(x=0.1)
     ax.set_xlabel("N (cells per side)")
     ax.set_ylabel(f"cost per unit of active work, relative to N = {act[0]['resolution'] if act else ''}")
     ax.set_title("flat = the cost follows the active work, not N²", fontsize=9)

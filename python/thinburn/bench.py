@@ -27,8 +27,8 @@ Writes DIR/results.json (rows {part, method, resolution or dt, error or seconds,
 rows hold slopes and ratios), DIR/meta.json, DIR/speed_accuracy.png, DIR/stability.png,
 DIR/performance.png and DIR/scaling.png. One progress line per measurement on stderr.
 Seconds of kernels are the best of --repeat runs (default 3; ffd at least 5). Frames: each
-frame's fastest time over --repeat runs of the same deterministic simulation (--quick: at most
-2 runs; the default-lattice active runs: 1). Everything runs on --threads threads (default: all
+frame's fastest time over --repeat runs of the same deterministic simulation (--quick and the
+default-lattice active runs: 1 run). Everything runs on --threads threads (default: all
 logical cores), set with thinburn.set_threads; meta.json keeps the load average.
 """
 from __future__ import annotations
@@ -382,7 +382,7 @@ def run_perf_parts(parts, quick, repeat, threads, log):
     """Rows of the performance parts (ffd, frames, scaling, active) at the --quick or full sizes.
     Full runs also time the frames on 1 thread when `threads` > 1."""
     rows = []
-    frame_repeat = min(repeat, 2) if quick else repeat
+    frame_repeat = 1 if quick else repeat
     if "ffd" in parts:
         set_threads(threads)
         sizes = [1000, 10000, 100000, 250000] if quick else [1000, 10000, 100000, 300000, 1000000]
