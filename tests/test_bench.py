@@ -199,7 +199,7 @@ def test_active_rows_and_fits(perf_rows):
         assert len(r["series_ms"]) == len(r["series_work"]) == r["frames"] == 3
         assert r["lattice"] == (0 if r["method"] == "fire" else 17)
         ms = np.array(r["series_ms"])
-        assert r["ms_per_unit_work"] == pytest.approx(ms.sum() / np.sum(r["series_work"]), rel=1e-3)
+        assert r["ms_per_unit_work"] == pytest.approx(ms.sum() / np.sum(r["series_work"]), rel=1e-12)
     fits = {r["method"]: r for r in perf_rows if r["part"] == "fit"}
     for mode in ("fire", "shell_lattice17"):
         f = fits[f"active_{mode}"]

@@ -284,7 +284,7 @@ def bench_active(sizes, modes, frames, warmup, repeat, threads, log):
                              lattice=sim.lattice_size, work=ACTIVE_MODES[mode][1],
                              mean_work=float(work.mean()),
                              ms_per_unit_work=float(ms.sum() / max(work.sum(), 1.0)),
-                             series_ms=ms.round(4).tolist(),
+                             series_ms=ms.tolist(),
                              series_work=work.tolist(),
                              series={k: stats[k].tolist() for k in STAT_KEYS},
                              threads=sim.threads, warmup_frames=warmup, **s))
