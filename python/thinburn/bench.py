@@ -399,7 +399,7 @@ def run_perf_parts(parts, quick, repeat, threads, log):
         sizes = [256, 512] + ([] if quick else [1024])
         rows += perf.bench_active(sizes, ["fire", "shell_lattice17"], 24, 24, frame_repeat, threads, log)
         if not quick:  # the default lattice grows with N: seconds per frame at 1024
-            rows += perf.bench_active(sizes, ["shell_auto_lattice"], 12, 24, 1, threads, log)
+            rows += perf.bench_active(sizes, ["shell_auto_lattice"], 6, 24, 1, threads, log)
     set_threads(threads)
     return rows
 
