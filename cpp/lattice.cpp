@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <stdexcept>
 #include <string>
 
@@ -65,14 +66,38 @@ double checked_param(double x, double hi, const char* what, Eigen::Index row) {
   return std::clamp(x, 0.0, hi);
 }
 
+// Four doubles of the displacement table (xyz and a pad). With GCC and Clang a vector
+// extension, which the compiler maps onto whatever SIMD the function is built for; elsewhere
+// Eigen's fixed-size array. The same IEEE operations per lane either way.
+#if defined(__GNUC__)
+typedef double Lanes4 __attribute__((vector_size(32)));
+// By reference, not by value: a 32-byte vector returned by value changes the ABI between the
+// AVX2 and the default build of a function.
+inline void load4(Lanes4& v, const double* p) { std::memcpy(&v, p, sizeof v); }
+inline void zero4(Lanes4& v) { v = Lanes4{0.0, 0.0, 0.0, 0.0}; }
+#else
+using Lanes4 = Eigen::Array4d;
+inline void load4(Lanes4& v, const double* p) { v = Eigen::Map<const Eigen::Array4d>(p); }
+inline void zero4(Lanes4& v) { v.setZero(); }
+#endif
+
+// GCC on x86-64 Linux also builds an AVX2 copy of the deform kernel, chosen at load time on
+// CPUs that have it (a 4-double layer is then one instruction, not two): no global flags, and
+// no FMA, so both copies round identically.
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__)
+#define THINBURN_AVX2_CLONE __attribute__((target_clones("avx2", "default")))
+#else
+#define THINBURN_AVX2_CLONE
+#endif
+
 // Deformed positions from the per-couple displacement table: 8 doubles per couple, bottom
-// (x, y, z, 0) then top (x, y, z, 0), so each layer is two SIMD pairs. Each point reads its own
-// stencil and writes its own row, summing w * ((1 - r) * d_bottom + r * d_top) in stencil order
-// from zero before adding the rest point: the result does not depend on the thread count.
-// Returns true when a couple index is out of range (couple 0 stands in; the caller throws).
+// (x, y, z, 0) then top (x, y, z, 0). Each point reads its own stencil and writes its own row,
+// summing w * ((1 - r) * d_bottom + r * d_top) in stencil order from zero before adding the
+// rest point: the result does not depend on the thread count. Returns true when a couple
+// index is out of range (couple 0 stands in; the caller throws).
 template <int St>
-bool deform_points(const Embedding& e, const double* table, int couples, Eigen::Ref<RowMatX3>& out) {
-  using Pad4 = Eigen::Array4d;
+THINBURN_AVX2_CLONE bool deform_points(const Embedding& e, const double* table, int couples,
+                                       Eigen::Ref<RowMatX3>& out) {
   const Eigen::Index n = e.size();
   const std::int32_t* couple = e.couple.data();
   const double* weight = e.weight.data();
@@ -88,7 +113,8 @@ bool deform_points(const Embedding& e, const double* table, int couples, Eigen::
 #endif
   for (Eigen::Index p = 0; p < n; ++p) {
     const double r = r_of[p], s = 1.0 - r;
-    Pad4 acc = Pad4::Zero();
+    Lanes4 acc, bottom, top;
+    zero4(acc);
     bool ok = true;
     for (int q = 0; q < St; ++q) {
       std::uint32_t c = static_cast<std::uint32_t>(couple[p * St + q]);
@@ -96,7 +122,9 @@ bool deform_points(const Embedding& e, const double* table, int couples, Eigen::
       c = c < limit ? c : 0;
       const double w = weight[p * St + q];
       const double* d = table + 8 * std::size_t(c);
-      acc += w * (s * Eigen::Map<const Pad4>(d) + r * Eigen::Map<const Pad4>(d + 4));
+      load4(bottom, d);
+      load4(top, d + 4);
+      acc += w * (s * bottom + r * top);
     }
     bad |= !ok;
     double* o = dst + p * stride;

@@ -75,27 +75,29 @@ def ffd_points(n: int, M: int = FFD_M):
     return params, rest
 
 
-def best_seconds(fn, repeat: int, min_seconds: float = 2e-3) -> float:
-    """Best of `repeat` timings of fn; a timing loops fn until min_seconds have passed so that
-    short calls are not timer noise. Returns seconds per call."""
+def best_seconds(fn, repeat: int, min_seconds: float = 2e-3, budget: float = 0.25) -> float:
+    """Seconds per call of fn: the best of at least `repeat` timings, and of as many more as
+    fit in `budget` seconds (at most 200), so that a busy machine leaves some clean ones. A
+    timing loops fn until min_seconds have passed, so short calls are not timer noise."""
     t0 = time.perf_counter()
     fn()
     once = max(time.perf_counter() - t0, 1e-7)
     calls = max(1, int(math.ceil(min_seconds / once)))
-    best = math.inf
-    for _ in range(repeat):
+    best, rounds, start = math.inf, 0, time.perf_counter()
+    while rounds < repeat or (time.perf_counter() - start < budget and rounds < 200):
         t0 = time.perf_counter()
         for _ in range(calls):
             fn()
         best = min(best, (time.perf_counter() - t0) / calls)
+        rounds += 1
     return best
 
 
-def bench_ffd(sizes, repeat, log, bandwidth_bytes=512 * 2**20, bandwidth_repeat=5, M=FFD_M):
+def bench_ffd(sizes, repeat, log, bandwidth_bytes=512 * 2**20, bandwidth_repeat=10, M=FFD_M):
     """FFD throughput rows and the bandwidth row. The bandwidth is probed before and after the
     deform timings; the higher of the two makes the bound (the fraction errs low)."""
     threads = int(_core.num_threads())
-    rep = max(bandwidth_repeat, repeat)  # cheap kernels: at least 5 timings each
+    rep = max(bandwidth_repeat, repeat)
     bw = measure_memory_bandwidth(bandwidth_bytes, rep)
     lat = ffd_lattice(M)
     rows = []
