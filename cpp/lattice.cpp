@@ -12,10 +12,10 @@ namespace thinburn {
 namespace {
 
 constexpr double kParamSlack = 1e-9;
-// Below this many points deform runs on one thread: the work (about 10-20 ns a point) is then
-// shorter than waking the team, and a team member the OS has descheduled (a busy machine)
-// would stall the whole call.
-constexpr Eigen::Index kParallelPoints = 4096;
+// Below this many points (about 0.1 ms of work) deform runs on one thread: waking the team
+// costs microseconds on a quiet machine, and milliseconds when another process holds a core
+// and a team member has to wait for the scheduler (measured: docs/bench.md).
+constexpr Eigen::Index kParallelPoints = 16384;
 
 // Weights of one lattice axis at coordinate x over the three nodes base, base+1, base+2
 // (base + 2 may be unused: weight 0). Linear: two nodes.

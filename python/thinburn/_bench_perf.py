@@ -429,9 +429,10 @@ def plot_scaling(rows, path):
         sub = [r for r in act if r["method"] == mode]
         ax.plot([r["cells"] for r in sub], [r["ms_per_frame"] for r in sub], "o-", color=f"C{j}",
                 label=f"{mode} (active work: {sub[0]['work']})")
-        for r in sub:
+        for r in sub:  # modes alternate above and below their points so labels do not collide
             ax.annotate(f"M={r['lattice']}\nwork {r['mean_work']:.3g}", (r["cells"], r["ms_per_frame"]),
-                        fontsize=6, xytext=(3, 4), textcoords="offset points", color=f"C{j}")
+                        fontsize=6, xytext=(4, 4 if j % 2 == 0 else -16), textcoords="offset points",
+                        color=f"C{j}")
     for j, mode in enumerate(modes):
         sub = [r for r in act if r["method"] == mode]
         cs = np.array([r["cells"] for r in sub], dtype=float)
