@@ -92,12 +92,12 @@ inline void zero4(Lanes4& v) { v.setZero(); }
 
 // Deformed positions from the per-couple displacement table: 8 doubles per couple, bottom
 // (x, y, z, 0) then top (x, y, z, 0). Each point reads its own stencil and writes its own row,
-// summing w * ((1 - r) * d_bottom + r * d_top) in stencil order from zero before adding the
-// rest point: the result does not depend on the thread count. Returns true when a couple
-// index is out of range (couple 0 stands in; the caller throws).
+// summing w * ((1 - r) * d_bottom + r * d_top) in stencil order from zero, adding the rest point
+// and raising z to z_min: the result does not depend on the thread count. Returns true when a
+// couple index is out of range (couple 0 stands in; the caller throws).
 template <int St>
 THINBURN_AVX2_CLONE bool deform_points(const Embedding& e, const double* table, int couples,
-                                       Eigen::Ref<RowMatX3>& out) {
+                                       Eigen::Ref<RowMatX3>& out, double z_min) {
   const Eigen::Index n = e.size();
   const std::int32_t* couple = e.couple.data();
   const double* weight = e.weight.data();
@@ -130,7 +130,7 @@ THINBURN_AVX2_CLONE bool deform_points(const Embedding& e, const double* table, 
     double* o = dst + p * stride;
     o[0] = rest[3 * p] + acc[0];
     o[1] = rest[3 * p + 1] + acc[1];
-    o[2] = rest[3 * p + 2] + acc[2];
+    o[2] = std::max(rest[3 * p + 2] + acc[2], z_min);
   }
   return bad;
 }
@@ -179,7 +179,7 @@ Embedding FfdLattice::embed(const RowMatX3& params, const RowMatX3& rest_points,
   return e;
 }
 
-void FfdLattice::deform(const Embedding& e, Eigen::Ref<RowMatX3> out) const {
+void FfdLattice::deform(const Embedding& e, Eigen::Ref<RowMatX3> out, double z_min) const {
   const Eigen::Index n = e.size();
   if (out.rows() != n)
     throw std::invalid_argument("out must have " + std::to_string(n) + " rows, got " +
@@ -187,18 +187,18 @@ void FfdLattice::deform(const Embedding& e, Eigen::Ref<RowMatX3> out) const {
   if (e.couple.size() != std::size_t(n) * e.stencil || e.weight.size() != e.couple.size() ||
       e.rest.rows() != n || (e.stencil != 4 && e.stencil != 9))
     throw std::invalid_argument("embedding is inconsistent (stencil, couples, weights, rest)");
+  if (std::isnan(z_min)) throw std::invalid_argument("z_min must not be NaN");
   // Each control vertex's displacement once per call, not once per point that uses it. The
   // buffer belongs to the calling thread: concurrent deforms (the GIL is released) never share it.
   thread_local std::vector<double> table;
   const int couples = M_ * M_;
   table.resize(8 * std::size_t(couples));
-  for (int c = 0; c < couples; ++c)
-    for (int k = 0; k < 2; ++k) {
-      for (int d = 0; d < 3; ++d) table[8 * c + 4 * k + d] = pos_(2 * c + k, d) - rest_(2 * c + k, d);
-      table[8 * c + 4 * k + 3] = 0.0;
-    }
-  const bool bad = e.stencil == 4 ? deform_points<4>(e, table.data(), couples, out)
-                                  : deform_points<9>(e, table.data(), couples, out);
+  for (int v = 0; v < 2 * couples; ++v) {  // vertex v = 2 * couple + layer: slot 4 v
+    for (int d = 0; d < 3; ++d) table[4 * v + d] = pos_(v, d) - rest_(v, d);
+    table[4 * v + 3] = 0.0;
+  }
+  const bool bad = e.stencil == 4 ? deform_points<4>(e, table.data(), couples, out, z_min)
+                                  : deform_points<9>(e, table.data(), couples, out, z_min);
   if (bad) throw std::invalid_argument("embedding does not fit this lattice");
 }
 

@@ -94,14 +94,17 @@ def best_seconds(fn, repeat: int, min_seconds: float = 2e-3, budget: float = 0.2
 
 
 def bench_ffd(sizes, repeat, log, bandwidth_bytes=512 * 2**20, bandwidth_repeat=10, M=FFD_M):
-    """FFD throughput rows and the bandwidth row. The bandwidth is probed before and after the
-    deform timings; the higher of the two makes the bound (the fraction errs low)."""
+    """FFD throughput rows and the bandwidth row. The bandwidth is probed before, between and
+    after the deform timings of each method; the highest probe makes the bound (the fraction
+    errs low; other work on the machine lowers a probe more often than it raises a timing)."""
     threads = int(_core.num_threads())
     rep = max(bandwidth_repeat, repeat)
-    bw = measure_memory_bandwidth(bandwidth_bytes, rep)
+    probes = [measure_memory_bandwidth(bandwidth_bytes, rep)]
     lat = ffd_lattice(M)
     rows = []
     for method in ("trilinear", "bspline"):
+        if method != "trilinear":
+            probes.append(measure_memory_bandwidth(bandwidth_bytes, rep))
         for n in sizes:
             params, rest = ffd_points(int(n), M)
             e = lat.embed(params, rest, method)
@@ -112,7 +115,8 @@ def bench_ffd(sizes, repeat, log, bandwidth_bytes=512 * 2**20, bandwidth_repeat=
                              seconds_allocating=alloc, vertices_per_second=n / secs,
                              bytes_per_point=ffd_bytes_per_point(e.stencil), stencil=e.stencil,
                              lattice=M, threads=threads))
-    bw = max(bw, measure_memory_bandwidth(bandwidth_bytes, rep))
+    probes.append(measure_memory_bandwidth(bandwidth_bytes, rep))
+    bw = max(probes)
     for r in rows:
         r["bandwidth_bytes_per_second"] = bw
         r["bound_vertices_per_second"] = bw / r["bytes_per_point"]
@@ -121,9 +125,9 @@ def bench_ffd(sizes, repeat, log, bandwidth_bytes=512 * 2**20, bandwidth_repeat=
             f"Mvert/s bound {r['bound_vertices_per_second'] / 1e6:7.1f} fraction={r['fraction']:.2f}")
     rows.insert(0, dict(part="ffd", method="bandwidth", resolution=int(bandwidth_bytes),
                         seconds=3 * 8 * (bandwidth_bytes // 24) / bw, bytes_per_second=bw,
-                        repeat=rep, threads=threads))
+                        probes=probes, repeat=rep, threads=threads))
     log(f"ffd         bandwidth  {bandwidth_bytes / 2**20:.0f} MiB triad {bw / 1e9:.2f} GB/s "
-        f"on {threads} thread(s)")
+        f"on {threads} thread(s) (probes {', '.join(f'{b / 1e9:.1f}' for b in probes)})")
     return rows
 
 
