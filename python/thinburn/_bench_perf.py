@@ -386,12 +386,14 @@ def plot_performance(rows, path):
     ax.set_xticks(np.arange(len(mats)))
     ax.set_xticklabels(mats)
     ax.set_yscale("log")
+    top = max([GOAL_FPS] + [r["frames_per_second"] for r in frames])
+    ax.set_ylim(5, top * 100)  # room above the bars for the legend
     ax.set_ylabel("simulated frames per second (dt = 1/24 s)")
     cells = frames[0]["resolution"] if frames else 128
     ax.set_title(f"whole frames at {cells}² cells (step 1/24 s + vertex_positions), demo scenes",
                  fontsize=9)
     ax.grid(True, axis="y", which="both", alpha=0.3)
-    ax.legend(fontsize=7)
+    ax.legend(fontsize=7, loc="upper left")
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
@@ -435,7 +437,7 @@ def plot_scaling(rows, path):
                 label=f"{mode} (active work: {sub[0]['work']})")
         for r in sub:  # modes alternate above and below their points so labels do not collide
             ax.annotate(f"M={r['lattice']}\nwork {r['mean_work']:.3g}", (r["cells"], r["ms_per_frame"]),
-                        fontsize=6, xytext=(4, 4 if j % 2 == 0 else -16), textcoords="offset points",
+                        fontsize=6, xytext=(4, (4, -16, 14)[j % 3]), textcoords="offset points",
                         color=f"C{j}")
     for j, mode in enumerate(modes):
         sub = [r for r in act if r["method"] == mode]
@@ -451,7 +453,9 @@ def plot_scaling(rows, path):
     ax.set_ylabel("ms per frame")
     ax.set_title("small fire on a large sheet: per-frame cost", fontsize=9)
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=7)
+    if act:  # room below the lowest point for the legend
+        ax.set_ylim(bottom=min(r["ms_per_frame"] for r in act) / 50)
+    ax.legend(fontsize=7, loc="lower right")
     ax = axes[1, 1]
     for j, mode in enumerate(modes):
         sub = [r for r in act if r["method"] == mode]
