@@ -26,7 +26,7 @@ Parts (in this order; all by default):
 Writes DIR/results.json (rows {part, method, resolution or dt, error or seconds, ...}; "fit"
 rows hold slopes and ratios), DIR/meta.json, DIR/speed_accuracy.png, DIR/stability.png,
 DIR/performance.png and DIR/scaling.png. One progress line per measurement on stderr.
-Seconds of kernels are the best of --repeat runs (default 3; ffd at least 5). Frames: each
+Seconds of kernels are the best of --repeat runs (default 3; ffd at least 10). Frames: each
 frame's fastest time over --repeat runs of the same deterministic simulation (--quick and the
 default-lattice active runs: 1 run). Everything runs on --threads threads (default: all
 logical cores), set with thinburn.set_threads; meta.json keeps the load average.
