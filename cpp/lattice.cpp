@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <stdexcept>
 #include <string>
 
@@ -11,6 +12,10 @@ namespace thinburn {
 namespace {
 
 constexpr double kParamSlack = 1e-9;
+// Below this many points (about 0.1 ms of work) deform runs on one thread: waking the team
+// costs microseconds on a quiet machine, and milliseconds when another process holds a core
+// and a team member has to wait for the scheduler (measured: docs/bench.md).
+constexpr Eigen::Index kParallelPoints = 16384;
 
 // Weights of one lattice axis at coordinate x over the three nodes base, base+1, base+2
 // (base + 2 may be unused: weight 0). Linear: two nodes.
@@ -61,6 +66,75 @@ double checked_param(double x, double hi, const char* what, Eigen::Index row) {
   return std::clamp(x, 0.0, hi);
 }
 
+// Four doubles of the displacement table (xyz and a pad). With GCC and Clang a vector
+// extension, which the compiler maps onto whatever SIMD the function is built for; elsewhere
+// Eigen's fixed-size array. The same IEEE operations per lane either way.
+#if defined(__GNUC__)
+typedef double Lanes4 __attribute__((vector_size(32)));
+// By reference, not by value: a 32-byte vector returned by value changes the ABI between the
+// AVX2 and the default build of a function.
+inline void load4(Lanes4& v, const double* p) { std::memcpy(&v, p, sizeof v); }
+inline void zero4(Lanes4& v) { v = Lanes4{0.0, 0.0, 0.0, 0.0}; }
+#else
+using Lanes4 = Eigen::Array4d;
+inline void load4(Lanes4& v, const double* p) { v = Eigen::Map<const Eigen::Array4d>(p); }
+inline void zero4(Lanes4& v) { v.setZero(); }
+#endif
+
+// GCC on x86-64 Linux also builds an AVX2 copy of the deform kernel, chosen at load time on
+// CPUs that have it (a 4-double layer is then one instruction, not two): no global flags, and
+// no FMA, so both copies round identically.
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__)
+#define THINBURN_AVX2_CLONE __attribute__((target_clones("avx2", "default")))
+#else
+#define THINBURN_AVX2_CLONE
+#endif
+
+// Deformed positions from the per-couple displacement table: 8 doubles per couple, bottom
+// (x, y, z, 0) then top (x, y, z, 0). Each point reads its own stencil and writes its own row,
+// summing w * ((1 - r) * d_bottom + r * d_top) in stencil order from zero, adding the rest point
+// and raising z to z_min: the result does not depend on the thread count. Returns true when a
+// couple index is out of range (couple 0 stands in; the caller throws).
+template <int St>
+THINBURN_AVX2_CLONE bool deform_points(const Embedding& e, const double* table, int couples,
+                                       Eigen::Ref<RowMatX3>& out, double z_min) {
+  const Eigen::Index n = e.size();
+  const std::int32_t* couple = e.couple.data();
+  const double* weight = e.weight.data();
+  const double* r_of = e.r.data();
+  const double* rest = e.rest.data();
+  double* dst = out.data();
+  const Eigen::Index stride = out.outerStride();
+  const auto limit = static_cast<std::uint32_t>(couples);
+  bool bad = false;
+#ifdef THINBURN_HAVE_OPENMP
+#pragma omp parallel for num_threads(thinburn::num_threads()) schedule(static) reduction(|| : bad) \
+    if (n >= kParallelPoints)
+#endif
+  for (Eigen::Index p = 0; p < n; ++p) {
+    const double r = r_of[p], s = 1.0 - r;
+    Lanes4 acc, bottom, top;
+    zero4(acc);
+    bool ok = true;
+    for (int q = 0; q < St; ++q) {
+      std::uint32_t c = static_cast<std::uint32_t>(couple[p * St + q]);
+      ok &= c < limit;
+      c = c < limit ? c : 0;
+      const double w = weight[p * St + q];
+      const double* d = table + 8 * std::size_t(c);
+      load4(bottom, d);
+      load4(top, d + 4);
+      acc += w * (s * bottom + r * top);
+    }
+    bad |= !ok;
+    double* o = dst + p * stride;
+    o[0] = rest[3 * p] + acc[0];
+    o[1] = rest[3 * p + 1] + acc[1];
+    o[2] = std::max(rest[3 * p + 2] + acc[2], z_min);
+  }
+  return bad;
+}
+
 }  // namespace
 
 FfdLattice::FfdLattice(int M, const RowMatX3& rest) : M_(M), rest_(rest), pos_(rest) {
@@ -105,29 +179,27 @@ Embedding FfdLattice::embed(const RowMatX3& params, const RowMatX3& rest_points,
   return e;
 }
 
-void FfdLattice::deform(const Embedding& e, Eigen::Ref<RowMatX3> out) const {
+void FfdLattice::deform(const Embedding& e, Eigen::Ref<RowMatX3> out, double z_min) const {
   const Eigen::Index n = e.size();
   if (out.rows() != n)
     throw std::invalid_argument("out must have " + std::to_string(n) + " rows, got " +
                                 std::to_string(out.rows()));
-  for (std::int32_t c : e.couple)
-    if (c < 0 || c >= M_ * M_) throw std::invalid_argument("embedding does not fit this lattice");
-  const int st = e.stencil;
-#ifdef THINBURN_HAVE_OPENMP
-#pragma omp parallel for num_threads(thinburn::num_threads()) schedule(static)
-#endif
-  for (Eigen::Index p = 0; p < n; ++p) {
-    const double r = e.r(p);
-    // Displacements, not positions, are interpolated: at rest every term is exactly zero.
-    Eigen::RowVector3d disp = Eigen::RowVector3d::Zero();
-    for (int q = 0; q < st; ++q) {
-      const std::size_t slot = std::size_t(p) * st + q;
-      const int c = e.couple[slot];
-      disp += e.weight[slot] * ((1.0 - r) * (pos_.row(2 * c) - rest_.row(2 * c)) +
-                                r * (pos_.row(2 * c + 1) - rest_.row(2 * c + 1)));
-    }
-    out.row(p) = e.rest.row(p) + disp;
+  if (e.couple.size() != std::size_t(n) * e.stencil || e.weight.size() != e.couple.size() ||
+      e.rest.rows() != n || (e.stencil != 4 && e.stencil != 9))
+    throw std::invalid_argument("embedding is inconsistent (stencil, couples, weights, rest)");
+  if (std::isnan(z_min)) throw std::invalid_argument("z_min must not be NaN");
+  // Each control vertex's displacement once per call, not once per point that uses it. The
+  // buffer belongs to the calling thread: concurrent deforms (the GIL is released) never share it.
+  thread_local std::vector<double> table;
+  const int couples = M_ * M_;
+  table.resize(8 * std::size_t(couples));
+  for (int v = 0; v < 2 * couples; ++v) {  // vertex v = 2 * couple + layer: slot 4 v
+    for (int d = 0; d < 3; ++d) table[4 * v + d] = pos_(v, d) - rest_(v, d);
+    table[4 * v + 3] = 0.0;
   }
+  const bool bad = e.stencil == 4 ? deform_points<4>(e, table.data(), couples, out, z_min)
+                                  : deform_points<9>(e, table.data(), couples, out, z_min);
+  if (bad) throw std::invalid_argument("embedding does not fit this lattice");
 }
 
 Eigen::VectorXd FfdLattice::scatter(const Embedding& e, const Eigen::VectorXd& values) const {

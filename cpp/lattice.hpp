@@ -9,6 +9,7 @@
 #include <Eigen/Core>
 
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 namespace thinburn {
@@ -45,8 +46,14 @@ class FfdLattice {
                   LatticeInterp interp = LatticeInterp::Trilinear) const;
 
   /// @brief Deformed positions of embedded points (n x 3, preallocated) from the current
-  /// control positions: parallel over points, no allocation.
-  void deform(const Embedding& e, Eigen::Ref<RowMatX3> out) const;
+  /// control positions. Each control vertex's displacement is computed once per call into a
+  /// table owned by the calling thread (allocated on its first call, reused after); then
+  /// parallel over points, bit-identical for any thread count. z_min: heights below it are
+  /// raised to it in the same pass (a floor; the default leaves every point as it is). Throws
+  /// std::invalid_argument when out has the wrong size or the embedding does not fit the
+  /// lattice (out is then partly written).
+  void deform(const Embedding& e, Eigen::Ref<RowMatX3> out,
+              double z_min = -std::numeric_limits<double>::infinity()) const;
 
   /// @brief Spread per-point values onto the control vertices with the embedding's weights
   /// (the transpose of the interpolation): sum over points of weight * value. Serial, fixed order.

@@ -3,6 +3,8 @@
 ///
 /// The core never relies on OMP_NUM_THREADS: callers set the count, and every
 /// parallel loop asks for it with num_threads(). Results never depend on it.
+#include <cstddef>
+
 namespace thinburn {
 
 /// @brief Whether the core was built with OpenMP.
@@ -16,5 +18,14 @@ int num_threads();
 
 /// @brief Number of logical cores the OpenMP runtime sees (1 without OpenMP).
 int max_hardware_threads();
+
+/// @brief Machine probe: sustained memory bandwidth of a STREAM-style triad a = b + s c on
+/// num_threads() threads.
+/// @param bytes total size of the three double arrays (>= 3 * 8 * 1024); to measure main
+/// memory, make it several times the last-level cache.
+/// @param repeat timed passes (>= 1); the fastest is kept.
+/// @return bytes moved per second, counted as STREAM does: 24 bytes per element (two reads,
+/// one write; the write-allocate read of a is not counted).
+double measure_memory_bandwidth(std::size_t bytes, int repeat);
 
 }  // namespace thinburn

@@ -133,6 +133,49 @@ def test_deform_is_thread_independent_and_writes_in_place():
     assert np.array_equal(a, out)
 
 
+@pytest.mark.parametrize("interp", INTERPS)
+def test_deform_matches_the_stencil_sum(interp):
+    """deform against the formula in numpy: rest + sum_q w_q ((1 - r) d_bottom + r d_top)."""
+    rng = np.random.default_rng(8)
+    M = 6
+    lat = _core.FfdLattice(M, wavy_lattice(M, rng))
+    lat.positions = lat.rest + rng.normal(scale=0.01, size=(2 * M * M, 3))
+    e = lat.embed(random_params(M, 500, rng), rng.normal(size=(500, 3)), interp)
+    d = lat.positions - lat.rest
+    bottom, top = d[2 * e.couples], d[2 * e.couples + 1]
+    r = e.r[:, None, None]
+    ref = e.rest + np.sum(e.weights[:, :, None] * ((1 - r) * bottom + r * top), axis=1)
+    assert np.allclose(lat.deform(e), ref, rtol=0, atol=1e-15)
+
+
+def test_deform_refuses_an_embedding_of_a_larger_lattice():
+    big = _core.FfdLattice(5, flat_rest(5, 1.0, 1.0, 0.01))
+    small = _core.FfdLattice(3, flat_rest(3, 1.0, 1.0, 0.01))
+    e = big.embed(np.array([[0.5, 0.5, 0.5], [3.5, 3.5, 0.5]]), np.zeros((2, 3)))
+    with pytest.raises(ValueError, match="does not fit"):
+        small.deform(e)
+    with pytest.raises(ValueError, match="out must have"):
+        big.deform_into(e, np.empty((3, 3)))
+
+
+def test_concurrent_deforms_keep_their_own_tables():
+    """deform releases the GIL and keeps its displacement table per calling thread: two Python
+    threads deforming different lattices at once get exactly the serial results."""
+    from concurrent.futures import ThreadPoolExecutor
+    rng = np.random.default_rng(9)
+    jobs = []
+    for M in (4, 9):
+        lat = _core.FfdLattice(M, wavy_lattice(M, rng))
+        lat.positions = lat.rest + rng.normal(scale=0.01, size=(2 * M * M, 3))
+        jobs.append((lat, lat.embed(random_params(M, 20000, rng), rng.normal(size=(20000, 3)), "bspline")))
+    serial = [lat.deform(e) for lat, e in jobs]
+    with ThreadPoolExecutor(2) as pool:
+        results = list(pool.map(lambda k: [jobs[k % 2][0].deform(jobs[k % 2][1]) for _ in range(20)], range(4)))
+    for k, res in enumerate(results):
+        for out in res:
+            assert np.array_equal(out, serial[k % 2])
+
+
 def test_bad_input_names_the_argument():
     rest = flat_rest(3, 1.0, 1.0, 0.01)
     with pytest.raises(ValueError, match="M must be"):

@@ -33,3 +33,21 @@ def set_threads(n: int | None) -> int:
 def get_threads() -> int:
     """The number of threads the core uses now."""
     return int(_core.num_threads())
+
+
+MIN_BANDWIDTH_BYTES = 3 * 8 * 1024
+
+
+def measure_memory_bandwidth(bytes: int = 512 * 2**20, repeat: int = 10) -> float:
+    """Machine probe: sustained memory bandwidth in bytes/s on the core's current threads.
+
+    A STREAM-style triad a = b + s·c over three float64 arrays of ``bytes`` in all (default
+    512 MiB, many times a usual last-level cache; at least 24576), fastest of ``repeat``
+    passes (>= 1), counted as STREAM counts it: 24 bytes per element (two reads, one write;
+    the write-allocate read is not counted). Releases the GIL. Bad arguments raise ValueError
+    (TypeError for non-integers) naming the argument.
+    """
+    from . import _validate as V
+    n = V.integer(bytes, "bytes", low=MIN_BANDWIDTH_BYTES)
+    r = V.integer(repeat, "repeat", low=1)
+    return float(_core.measure_memory_bandwidth(n, r))

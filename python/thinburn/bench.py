@@ -1,8 +1,8 @@
-"""Speed against accuracy of every part's methods, in one run.
+"""Speed against accuracy of every part's methods, and whole-frame performance, in one run.
 
-    python -m thinburn.bench [--quick] [--repeat N] --out DIR
+    python -m thinburn.bench [--quick] [--repeat N] [--threads T] [--parts P ...] --out DIR
 
-Parts (in this order):
+Parts (in this order; all by default):
   fire_front   every FRONT_METHODS method from a point source at the grid centre, unit speed;
                error = max relative error over cells >= 8 cells from the source against the
                exact distance; n = 65, 129, 257 (--quick) and 513, 1025.
@@ -12,11 +12,24 @@ Parts (in this order):
                dt (bisection, undamped) at several stiffnesses against theory.
   heat         thinburn.heat.kernel_sum direct vs fast (tolerance 0.01) on a random cloud;
                error = max relative error against the direct sum (direct: 0).
+  ffd          FfdLattice.deform throughput, trilinear and B-spline, n = 1e3 .. 1e6 points
+               (--quick: .. 2.5e5), against bandwidth / bytes per point, the bandwidth from a
+               STREAM triad measured in the same run.
+  frames       whole frames (step 1/24 s + vertex_positions) at 128² cells for every preset's
+               demo scene, its own mesh and ~16k vertices; the paper's ~10 frames/s beside.
+  scaling      per-frame cost against cells (64² .. 1024², --quick .. 256²) on the A4 demo
+               scene, and against mesh vertices (1e3 .. 1e6, --quick .. 1e5) at 128² cells.
+  active       a 1 m sheet with a 1 cm fire at N = 256, 512, 1024 (--quick: 256, 512): cost per
+               unit of active work against N (fire only; shell with M = 17; shell with the
+               default lattice, full runs only).
 
-Writes DIR/results.json (rows {part, method, resolution or dt, error, seconds, ...}),
-DIR/speed_accuracy.png and DIR/stability.png. One progress line per measurement on stderr.
-Seconds are the best of --repeat runs (default 3), on the threads the
-process was given (thinburn.set_threads).
+Writes DIR/results.json (rows {part, method, resolution or dt, error or seconds, ...}; "fit"
+rows hold slopes and ratios), DIR/meta.json, DIR/speed_accuracy.png, DIR/stability.png,
+DIR/performance.png and DIR/scaling.png. One progress line per measurement on stderr.
+Seconds of kernels are the best of --repeat runs (default 3; ffd at least 10). Frames: each
+frame's fastest time over --repeat runs of the same deterministic simulation (--quick and the
+default-lattice active runs: 1 run). Everything runs on --threads threads (default: all
+logical cores), set with thinburn.set_threads; meta.json keeps the load average.
 """
 from __future__ import annotations
 
@@ -30,7 +43,9 @@ import time
 
 import numpy as np
 
+from . import _bench_perf as perf
 from . import _core
+from ._threads import set_threads
 from .fire_front import FRONT_METHODS, method_enum
 
 # ---------------------------------------------------------------- fire front
@@ -334,6 +349,15 @@ def plot_stability(rows, path):
 # ---------------------------------------------------------------- driver
 
 
+def _load_average():
+    """The 1, 5 and 15 minute load averages (None where the platform has none): other work on
+    the machine shows in the timings, most of all with several threads."""
+    try:
+        return list(os.getloadavg())
+    except (AttributeError, OSError):
+        return None
+
+
 def _writable_dir(ap, out):
     try:
         os.makedirs(out, exist_ok=True)
@@ -345,25 +369,66 @@ def _writable_dir(ap, out):
         ap.error(f"--out {out!r} is not a writable directory: {exc}")
 
 
+PARTS = ("fire_front", "integrators", "heat") + perf.PERF_PARTS
+FIGURES = (  # file, plotting function, the row parts it draws
+    ("speed_accuracy.png", plot_speed_accuracy, ("fire_front", "integrators", "heat")),
+    ("stability.png", plot_stability, ("stability",)),
+    ("performance.png", perf.plot_performance, ("ffd", "frames")),
+    ("scaling.png", perf.plot_scaling, ("scaling", "active")),
+)
+
+
+def run_perf_parts(parts, quick, repeat, threads, log):
+    """Rows of the performance parts (ffd, frames, scaling, active) at the --quick or full sizes.
+    Full runs also time the frames on 1 thread when `threads` > 1."""
+    rows = []
+    frame_repeat = 1 if quick else repeat
+    if "ffd" in parts:
+        set_threads(threads)
+        sizes = [1000, 10000, 100000, 250000] if quick else [1000, 10000, 100000, 300000, 1000000]
+        rows += perf.bench_ffd(sizes, repeat, log)
+    if "frames" in parts:
+        counts = [threads] if quick else sorted({1, threads}, reverse=True)
+        rows += perf.bench_frames(perf.ALL_MATERIALS, 128, 24 if quick else 120, 48, [None, 16000],
+                                  frame_repeat, counts, log)
+    if "scaling" in parts:
+        cells = [64, 128, 256] + ([] if quick else [512, 1024])
+        verts = [1000, 10000, 100000] + ([] if quick else [1000000])
+        rows += perf.bench_scaling(cells, verts, 24 if quick else 48, 48, frame_repeat, threads, log)
+    if "active" in parts:
+        sizes = [256, 512] + ([] if quick else [1024])
+        rows += perf.bench_active(sizes, ["fire", "shell_lattice17"], 24, 24, frame_repeat, threads, log)
+        if not quick:  # the default lattice grows with N: seconds per frame at 1024
+            rows += perf.bench_active(sizes, ["shell_auto_lattice"], 6, 24, 1, threads, log)
+    set_threads(threads)
+    return rows
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(prog="python -m thinburn.bench",
                                  description=__doc__.splitlines()[0])
     ap.add_argument("--out", required=True, help="directory for results.json and the figures")
     ap.add_argument("--quick", action="store_true", help="small sizes only (about a minute)")
     ap.add_argument("--repeat", type=int, default=None, help="runs per timing, best kept")
-    ap.add_argument("--parts", nargs="+", default=["fire_front", "integrators", "heat"],
-                    choices=["fire_front", "integrators", "heat"], help="parts to measure")
+    ap.add_argument("--threads", type=int, default=None,
+                    help="threads of the core (default: all logical cores)")
+    ap.add_argument("--parts", nargs="+", default=list(PARTS), choices=list(PARTS),
+                    help="parts to measure")
     args = ap.parse_args(None if argv is None else [str(a) for a in argv])
     if args.repeat is not None and args.repeat < 1:
         ap.error(f"--repeat must be >= 1, got {args.repeat}")
+    if args.threads is not None and args.threads < 1:
+        ap.error(f"--threads must be >= 1, got {args.threads}")
     out = os.fspath(args.out)
     _writable_dir(ap, out)
     repeat = args.repeat or 3
+    threads = set_threads(args.threads)
 
     def log(msg):
         print(msg, file=sys.stderr, flush=True)
 
     t_start = time.perf_counter()
+    load_start = _load_average()
     rows = []
     if "fire_front" in args.parts:
         sizes = [65, 129, 257] + ([] if args.quick else [513, 1025])
@@ -375,17 +440,22 @@ def main(argv=None) -> int:
     if "heat" in args.parts:
         counts = [100, 1000, 10000] + ([] if args.quick else [100000])
         rows += bench_heat(counts, repeat, log)
-    meta = dict(quick=args.quick, repeat=repeat, machine=platform.machine(),
-                processor=platform.processor(), python=platform.python_version(),
-                cpu_count=os.cpu_count(), wall_seconds=time.perf_counter() - t_start)
+    rows += run_perf_parts(args.parts, args.quick, repeat, threads, log)
+    meta = dict(quick=args.quick, repeat=repeat, threads=threads, parts=args.parts,
+                machine=platform.machine(), processor=platform.processor(),
+                python=platform.python_version(), cpu_count=os.cpu_count(),
+                has_openmp=bool(_core.has_openmp()), load_average_start=load_start,
+                load_average_end=_load_average(), wall_seconds=time.perf_counter() - t_start)
     with open(os.path.join(out, "results.json"), "w") as f:
         json.dump(rows, f, indent=1)
     with open(os.path.join(out, "meta.json"), "w") as f:
         json.dump(meta, f, indent=1)
-    plot_speed_accuracy(rows, os.path.join(out, "speed_accuracy.png"))
-    plot_stability(rows, os.path.join(out, "stability.png"))
-    log(f"wrote {out}/results.json, speed_accuracy.png, stability.png "
-        f"in {meta['wall_seconds']:.1f} s")
+    figures = []
+    for name, plot, needs in FIGURES:
+        if any(r["part"] in needs for r in rows):  # a figure only when one of its parts ran
+            plot(rows, os.path.join(out, name))
+            figures.append(name)
+    log(f"wrote {out}/results.json, {', '.join(figures)} in {meta['wall_seconds']:.1f} s")
     return 0
 
 

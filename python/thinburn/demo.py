@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from . import _validate as V
 from . import render
 from ._progress import Progress
 from .scenes import A4, rect_sheet
@@ -30,7 +31,7 @@ class Scene:
     view_pad: float = 0.35  # room around the sheet in the 3-D view, in sheet sizes
 
 
-def default_scene(material="paper") -> Scene:
+def default_scene(material="paper", vertices=None) -> Scene:
     """The scene for a material, after the paper's figures.
 
     paper, hard_paper: an A4 sheet lying on a table, lit at a corner (Figs 8, 10).
@@ -38,21 +39,37 @@ def default_scene(material="paper") -> Scene:
     (Figs 9, 11): the denser cloth sags and sinks as it burns.
     curtain: a 1 m × 1.4 m curtain hanging from its top edge, wind from behind, lit at the
     bottom (Fig. 12); flames climb faster than they descend.
+
+    vertices: None for the demo's own mesh, or about this many mesh vertices (the same sheet,
+    its grid refined or coarsened with its aspect kept; at least 2 x 2).
     """
+    if vertices is not None:
+        vertices = V.integer(vertices, "vertices", low=4)
     if material in ("cloth", "silk"):
-        v, f = rect_sheet(0.4, 0.4, nx=41, ny=41, z=0.25)
-        corners = [0, 40, 41 * 40, 41 * 41 - 1]
+        nx, ny = _grid(41, 41, vertices)
+        v, f = rect_sheet(0.4, 0.4, nx=nx, ny=ny, z=0.25)
+        corners = [0, nx - 1, nx * (ny - 1), nx * ny - 1]
         return Scene(f"40 cm square of {material} held at its corners 25 cm above a table, lit at a corner",
                      v, f, (0.03, 0.03, 0.25), 0.012, floor=0.0, pinned=np.array(corners))
     if material == "curtain":
-        v, f = rect_sheet(1.0, 1.4, nx=41, ny=57, vertical=True, z=0.05)
+        nx, ny = _grid(41, 57, vertices)
+        v, f = rect_sheet(1.0, 1.4, nx=nx, ny=ny, vertical=True, z=0.05)
         top = np.flatnonzero(np.isclose(v[:, 2], v[:, 2].max()))
         return Scene("1 m × 1.4 m curtain hanging from its top edge, wind from behind, lit at the bottom",
                      v, f, (0.5, 0.0, 0.06), 0.02, pinned=top, wind=(0.0, 1.5, 0.0),
                      params=dict(climb=0.4), view_pad=0.05)
-    v, f = rect_sheet(A4[0], A4[1], nx=43, ny=61)
+    nx, ny = _grid(43, 61, vertices)
+    v, f = rect_sheet(A4[0], A4[1], nx=nx, ny=ny)
     return Scene(f"A4 sheet of {material} lying on a table, lit at a corner", v, f,
                  (0.004, 0.004, 0.0), 0.006, floor=0.0)
+
+
+def _grid(nx: int, ny: int, vertices) -> tuple:
+    """Grid size of a demo sheet: its own (nx, ny), or scaled to about `vertices` in all."""
+    if vertices is None:
+        return nx, ny
+    k = np.sqrt(vertices / (nx * ny))
+    return max(2, int(round(nx * k))), max(2, int(round(ny * k)))
 
 
 def build(scene: Scene, material="paper", cells=128, seed=0, threads=None) -> Simulation:
