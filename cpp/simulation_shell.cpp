@@ -11,6 +11,8 @@
 namespace thinburn {
 namespace {
 
+constexpr int kPaperCells = 128;  // the paper's grid: 128 x 128 cells (§5)
+
 // M from the sheet: one couple per 16 cells (the paper's Fig. 3 lattice is about this coarse;
 // each couple averages the heat of many cells) and no finer than 2 cm (finer crumples are
 // hardly visible and stiffen the lattice), 4..65 per side.
@@ -117,7 +119,14 @@ void Simulation::build_shell(const std::vector<std::uint8_t>& pinned) {
   ParticleParams pp = params_.particles;
   pp.seed = params_.seed ^ 0x5bd1e995ULL;
   particles_ = std::make_unique<ParticleSystem>(pp);
-  bending_ = std::make_unique<Bending>(M_ * M_, params_.bending);
+  // Eq 3 sums over the ignition points, the burning cells: the same fire at twice the grid
+  // resolution has four times the points. Each cell counts as its share of a cell of the
+  // paper's 128 x 128 grid, so pyrolysis (and the bend) does not depend on N, and N = 128
+  // is the paper's Cp.
+  BendingParams bp = params_.bending;
+  const double per_paper_cell = static_cast<double>(kPaperCells) / N;
+  bp.cp *= per_paper_cell * per_paper_cell;
+  bending_ = std::make_unique<Bending>(M_ * M_, bp);
 }
 
 void Simulation::cell_couples(int cell, int* couple, double* w) const {

@@ -116,6 +116,19 @@ def test_burnt_sheet_keeps_ash_strength_of_the_lattice_stiffness(square):
     np.testing.assert_allclose(sim.control_strength(), 0.25, rtol=1e-12)
 
 
+def test_pyrolysis_does_not_depend_on_the_grid(a4):
+    # Eq 3 sums over burning cells; weighted by their share of a paper (128²) cell, the same
+    # fire gives the same field at any N (the lattice is held at 9 so the targets are the same).
+    means = []
+    for N in (64, 128, 256):
+        sim = thinburn.Simulation(*a4, cells=N, lattice=9, floor=0.0, **QUIET)
+        sim.ignite((0.05, 0.05, 0.0), radius=0.02)
+        sim.run(2.0, dt=1 / 24)
+        means.append(sim.pyrolysis().mean())
+    assert min(means) > 0
+    assert max(means) / min(means) < 1.05
+
+
 def test_heat_reaches_the_lattice_and_bends_it(a4):
     v, f = a4
     sim = thinburn.Simulation(v, f, cells=48, floor=0.0)
@@ -146,9 +159,11 @@ def test_symmetric_input_gives_symmetric_output():
     # pyrolysis, D and motion are mirror-symmetric about x = w/2. The lattice dynamics alone is
     # symmetric to 1e-12 (tests/test_dynamics.py); here the fire front accepts mirror cells in
     # index order within a step while the shape they read moves, so the coupled result is
-    # symmetric to a stated 5 % of the motion (measured: 0.3 %).
+    # symmetric to a stated 5 % of the motion (measured: 0.07 %). beta = 3e-4 keeps the bend
+    # short of a fold: at the preset's 1e-3 this 4 x 4 lattice folds in two, and which way it
+    # buckles is a bifurcation that rounding decides.
     v, f = rect_sheet(0.2, 0.2, nx=21, ny=21)
-    sim = thinburn.Simulation(v, f, cells=40, floor=0.0, particle_birth_rate=0.0, **QUIET)
+    sim = thinburn.Simulation(v, f, cells=40, floor=0.0, particle_birth_rate=0.0, beta=3e-4, **QUIET)
     sim.ignite((0.1, 0.1, 0.0), radius=0.012)
     sim.run(4.0, dt=1 / 24)
     x = sim.vertex_positions()
