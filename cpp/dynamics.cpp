@@ -19,7 +19,8 @@ namespace {
 constexpr int kDotChunk = 4096;
 constexpr int kParallelMin = 1024;  // below this many items a loop runs on one thread
 constexpr int kMaxPasses = 4;
-constexpr int kRedoShare = 16;  // a step is redone when it stresses awake over 1/16 of its awake count
+constexpr int kRedoShare = 16;
+constexpr int kSleepShare = 10;  // vertices fall asleep only when over 1/10 of the awake set is quiet  // a step is redone when it stresses awake over 1/16 of its awake count
 constexpr int kMaxContactRounds = 8;  // solves per implicit substep while contacts are added
 constexpr double kPi = 3.14159265358979323846;
 
@@ -1140,8 +1141,14 @@ void LatticeDynamics::update_sleep(double dt) {
     if (quiet) quiet = supported(v, vertex_force(v, x, vel_)).norm() / mass_(v) * dt < p_.sleep_speed;
     mark_[v] = quiet ? 1 : 0;
   }
+  // Regions sleep, not stragglers: when the quiet vertices are under 1/kSleepShare of the awake
+  // set, none sleeps this step. A few sleepers inside a moving sheet save little and cost a
+  // redone step or a new factorization each time the motion stresses them awake.
+  int quiet_count = 0;
+  for (int v : active_) quiet_count += mark_[v];
+  const bool bulk = quiet_count * kSleepShare >= na;
   for (int v : active_) {
-    if (mark_[v]) {
+    if (mark_[v] && bulk) {
       awake_[v] = 0;
       slept_at_[v] = steps_;
       vel_.row(v).setZero();
