@@ -20,7 +20,8 @@ constexpr int kDotChunk = 4096;
 constexpr int kParallelMin = 1024;  // below this many items a loop runs on one thread
 constexpr int kMaxPasses = 4;
 constexpr int kRedoShare = 16;
-constexpr int kSleepShare = 10;  // vertices fall asleep only when over 1/10 of the awake set is quiet  // a step is redone when it stresses awake over 1/16 of its awake count
+constexpr int kSleepShare = 10;
+constexpr int kMaxHold = 10000;  // steps  // vertices fall asleep only when over 1/10 of the awake set is quiet  // a step is redone when it stresses awake over 1/16 of its awake count
 constexpr int kMaxContactRounds = 8;  // solves per implicit substep while contacts are added
 constexpr double kPi = 3.14159265358979323846;
 
@@ -155,6 +156,7 @@ LatticeDynamics::LatticeDynamics(FfdLattice& lattice, const DynamicsParams& p)
   awake_.assign(n_, 1);
   forced_.assign(n_, 0);
   hold_.assign(n_, 0);
+  hold_len_.assign(n_, 0);
   slept_at_.assign(n_, std::numeric_limits<std::int64_t>::min() / 2);
   mark_.assign(n_, 0);
   list_.reserve(n_);
@@ -1115,8 +1117,14 @@ int LatticeDynamics::wake_stressed_sleepers(double dt) {
     const Eigen::Vector3d f = supported(o, vertex_force(o, lat_.positions(), vel_));
     if (f.norm() / mass_(o) * dt >= p_.sleep_speed) {
       awake_[o] = 1;
-      // Woken within wake_hold steps of falling asleep: it flickers, so it stays awake.
-      if (steps_ - slept_at_[o] <= p_.wake_hold) hold_[o] = static_cast<std::uint16_t>(p_.wake_hold);
+      // Woken within wake_hold steps of falling asleep: it flickers, so it stays awake, each
+      // time it flickers again twice as long (up to kMaxHold steps).
+      if (steps_ - slept_at_[o] <= p_.wake_hold) {
+        hold_len_[o] = static_cast<std::uint16_t>(std::clamp(2 * int(hold_len_[o]), p_.wake_hold, kMaxHold));
+        hold_[o] = hold_len_[o];
+      } else {
+        hold_len_[o] = 0;
+      }
       ++woke;
     }
   }

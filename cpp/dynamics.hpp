@@ -54,7 +54,7 @@ struct DynamicsParams {
   /// Steps a flickering vertex stays awake: one that its neighbours' motion woke within this
   /// many steps of falling asleep. Vertices at the edge of a moving region otherwise fall asleep
   /// and are woken again step after step, each time redoing the step (a pass) and changing the
-  /// active set (a new factorization).
+  /// active set (a new factorization). A vertex that flickers again is held twice as long.
   int wake_hold = 12;
   int substeps = 0;            ///< 0: chosen per step from stability (explicit) or motion (implicit)
   int max_substeps = 10000;    ///< explicit steps needing more throw std::runtime_error
@@ -205,6 +205,7 @@ class LatticeDynamics {
   Eigen::Vector3d wind_{0, 0, 0};
   std::vector<std::uint8_t> pinned_, awake_, forced_;
   std::vector<std::uint16_t> hold_;  // steps a flickering sleeper still stays awake
+  std::vector<std::uint16_t> hold_len_;  // the length of its last hold (doubles per flicker)
   std::vector<std::int64_t> slept_at_;  // step at which each vertex last fell asleep
   std::int64_t steps_ = 0;          // steps taken
   std::vector<int> active_, slot_;  // active vertices; slot_[v] = position in active_ or -1

@@ -3,7 +3,7 @@ a sheet lying on a floor with a small hot spot; plus the measured stability limi
 convergence orders of the integrators against theory. Prints and writes JSON.
 
     python scripts/bench_dynamics.py [--sizes 8 16 32 64] [--frames 12] [--threads 1]
-                                     [--out bench_dynamics.json] [--no-theory]
+                                     [--out bench_dynamics.json] [--no-theory] [--wake-hold 12]
 """
 from __future__ import annotations
 
@@ -23,12 +23,13 @@ from thinburn.lattice import flat_rest
 SIDE, THICKNESS, DENSITY, DT = 0.3, 0.002, 0.08, 1 / 24
 
 
-def hot_spot_run(M: int, sleeping: bool, frames: int, integrator: str = "implicit") -> dict:
+def hot_spot_run(M: int, sleeping: bool, frames: int, integrator: str = "implicit",
+                 wake_hold: int = 12) -> dict:
     """A SIDE x SIDE paper sheet on a table; from frame 3 one couple at the centre turns by
     0.02 rad per frame (a small hot spot). Times the steps after the sheet settled."""
     lat = _core.FfdLattice(M, flat_rest(M, SIDE, SIDE, THICKNESS, (-SIDE / 2, -SIDE / 2, 0.0)))
     dyn = _core.LatticeDynamics(lat, sleeping=sleeping, has_floor=True, floor_z=-THICKNESS / 2,
-                                integrator=integrator)
+                                integrator=integrator, wake_hold=wake_hold)
     dyn.set_masses(vertex_masses(M, SIDE * SIDE, DENSITY))
     D, heat = np.zeros(M * M), np.zeros(2 * M * M)
     centre = (M // 2) * M + M // 2
@@ -117,6 +118,7 @@ def main() -> None:
     ap.add_argument("--threads", type=int, default=1)
     ap.add_argument("--out", default="bench_dynamics.json")
     ap.add_argument("--no-theory", action="store_true")
+    ap.add_argument("--wake-hold", type=int, default=12, help="LatticeDynamics wake_hold (steps)")
     args = ap.parse_args()
     thinburn.set_threads(args.threads)
     result = dict(machine=platform.processor() or platform.machine(), threads=args.threads,
@@ -127,7 +129,7 @@ def main() -> None:
     for M in args.sizes:
         ref = None
         for sleeping in (False, True):
-            r = hot_spot_run(M, sleeping, args.frames)
+            r = hot_spot_run(M, sleeping, args.frames, wake_hold=args.wake_hold)
             pos = r.pop("positions")
             if ref is None:
                 ref = pos
