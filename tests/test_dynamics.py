@@ -538,14 +538,6 @@ def test_a_fresh_factorization_is_exact():
         assert st.cg_iterations <= st.substeps
 
 
-def test_wake_hold_keeps_stressed_sleepers_awake():
-    # Without a hold, sleepers at the edge of the crumpling region fall asleep and are stressed
-    # awake again, redoing steps; the hold cuts the redone passes.
-    _, _, free = crumpling_on_floor("auto", frames=48, wake_hold=0)
-    _, _, held = crumpling_on_floor("auto", frames=48, wake_hold=24)
-    assert sum(s.passes for s in held) <= sum(s.passes for s in free)
-
-
 def test_strength_scales_each_spring_by_the_mean_of_its_ends():
     # K is linear in the spring constants: a uniform strength s scales it by s exactly, and
     # strengths s_a, s_b scale the spring between them by (s_a + s_b) / 2.

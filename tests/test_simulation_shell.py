@@ -129,6 +129,24 @@ def test_pyrolysis_does_not_depend_on_the_grid(a4):
     assert max(means) / min(means) < 1.05
 
 
+def test_wake_hold_cuts_redone_steps_on_a_held_cloth():
+    # Cloth held at its corners, burning: nearly the whole lattice moves, and without the hold
+    # its stragglers fall asleep and are stressed awake again, redoing steps and refactoring.
+    from thinburn.demo import build, default_scene
+    counts = {}
+    for hold in (0, 12):
+        sim = build(default_scene("cloth"), "cloth", cells=64, threads=1)
+        sim.set_dynamics(wake_hold=hold)
+        passes = factorizations = 0
+        for _ in range(150):
+            sim.step(1 / 24)
+            passes += sim.stats()["passes"]
+            factorizations += sim.stats()["factorizations"]
+        counts[hold] = (passes, factorizations)
+    assert counts[12][0] < 0.75 * counts[0][0]  # measured 163 against 284
+    assert counts[12][1] < 0.5 * counts[0][1]   # measured 17 against 135
+
+
 def test_heat_reaches_the_lattice_and_bends_it(a4):
     v, f = a4
     sim = thinburn.Simulation(v, f, cells=48, floor=0.0)
