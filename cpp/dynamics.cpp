@@ -19,9 +19,9 @@ namespace {
 constexpr int kDotChunk = 4096;
 constexpr int kParallelMin = 1024;  // below this many items a loop runs on one thread
 constexpr int kMaxPasses = 4;
-constexpr int kRedoShare = 16;
-constexpr int kSleepShare = 10;
-constexpr int kMaxHold = 10000;  // steps  // vertices fall asleep only when over 1/10 of the awake set is quiet  // a step is redone when it stresses awake over 1/16 of its awake count
+constexpr int kRedoShare = 16;   // a step is redone when it stresses awake over 1/16 of its awake count
+constexpr int kSleepShare = 10;  // vertices fall asleep only when over 1/10 of the awake set is quiet
+constexpr int kMaxHold = 10000;  // steps: the longest flicker hold (and wake_hold's upper bound)
 constexpr int kMaxContactRounds = 8;  // solves per implicit substep while contacts are added
 constexpr double kPi = 3.14159265358979323846;
 
@@ -110,7 +110,8 @@ void validate(const DynamicsParams& p) {
   nonneg(p.cg_velocity_tolerance, "cg_velocity_tolerance");
   require(p.ldlt_max_vertices >= 0, "ldlt_max_vertices must be >= 0");
   require(p.refactor_iterations >= 0, "refactor_iterations must be >= 0");
-  require(p.wake_hold >= 0 && p.wake_hold <= 10000, "wake_hold must be in [0, 10000]");
+  require(p.wake_hold >= 0 && p.wake_hold <= kMaxHold,
+          "wake_hold must be in [0, " + std::to_string(kMaxHold) + "]");
 }
 
 // The implicit system over the active vertices, lower triangle in compressed columns, and its
@@ -962,18 +963,18 @@ void LatticeDynamics::refresh_factor(double h) {
 }
 
 int LatticeDynamics::implicit_solve(double h) {
+  Buffers B = buffers(work_, sa_.size(), n_);
+  const int na = static_cast<int>(active_.size());
   const bool ldlt = use_ldlt();
   if (ldlt) refresh_factor(h);
   precond_ldlt_ = ldlt && factor_->valid;
   if (!precond_ldlt_) {
     build_jacobi(h);
   } else {
-    Buffers B = buffers(work_, sa_.size(), n_);
-    for (int a = 0; a < static_cast<int>(active_.size()); ++a)
+    // Vertices outside the factored set are preconditioned by their diagonal block.
+    for (int a = 0; a < na; ++a)
       if (factor_->slot[active_[a]] < 0) mat3(B.pinv, 2 * a) = mat3(B.diag, a).inverse();
   }
-  Buffers B = buffers(work_, sa_.size(), n_);
-  const int na = static_cast<int>(active_.size());
   const int N = 3 * na;
   auto axpy = [&](double alpha, const double* xv, double* y) {  // y += alpha x
 #ifdef THINBURN_HAVE_OPENMP

@@ -177,7 +177,8 @@ void Simulation::retire_burnt() {
       state_[c] = kBurnt;
       if (lattice_) {
         add_cell_mass(c, -(1.0 - keep) * mass_[c]);
-        add_burnt_area(c);
+        add_cell_area(c, burnt_area_);
+        strength_dirty_ = true;
       }
       mass_[c] *= keep;
     } else {

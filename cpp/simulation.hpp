@@ -116,7 +116,7 @@ class Simulation {
   void bilinear_couples(double s, double t, int* couple, double* w) const;
   void cell_couples(int cell, int* couple, double* w) const;
   void add_cell_mass(int cell, double dm);
-  void add_burnt_area(int cell);
+  void add_cell_area(int cell, Eigen::VectorXd& onto) const;  // half to each layer
   void step_shell(double dt);
   void emit_particles(double dt);
   void update_pyrolysis();
@@ -144,7 +144,7 @@ class Simulation {
   std::unique_ptr<ParticleSystem> particles_;
   std::unique_ptr<Bending> bending_;
   Embedding vertex_embedding_;
-  Eigen::VectorXd control_mass_, control_area_, burnt_area_;
+  Eigen::VectorXd control_mass_, control_area_, burnt_area_, strength_;
   bool mass_dirty_ = false;
   bool strength_dirty_ = false;
   StepStats stats_;

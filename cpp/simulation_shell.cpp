@@ -87,11 +87,7 @@ void Simulation::build_shell(const std::vector<std::uint8_t>& pinned) {
   for (int c = 0; c < N * N; ++c) {
     if (!sheet_.inside()[c]) continue;
     add_cell_mass(c, mass_[c]);
-    int cp[4];
-    double w[4];
-    cell_couples(c, cp, w);
-    for (int k = 0; k < 4; ++k)
-      for (int layer = 0; layer < 2; ++layer) control_area_[2 * cp[k] + layer] += 0.5 * w[k] * sheet_.du() * sheet_.dv();
+    add_cell_area(c, control_area_);
   }
 
   DynamicsParams dp = params_.dynamics;
@@ -146,13 +142,12 @@ void Simulation::add_cell_mass(int cell, double dm) {
   mass_dirty_ = true;
 }
 
-void Simulation::add_burnt_area(int cell) {
+void Simulation::add_cell_area(int cell, Eigen::VectorXd& onto) const {
   int cp[4];
   double w[4];
   cell_couples(cell, cp, w);
   for (int k = 0; k < 4; ++k)
-    for (int layer = 0; layer < 2; ++layer) burnt_area_[2 * cp[k] + layer] += 0.5 * w[k] * sheet_.du() * sheet_.dv();
-  strength_dirty_ = true;
+    for (int layer = 0; layer < 2; ++layer) onto[2 * cp[k] + layer] += 0.5 * w[k] * sheet_.du() * sheet_.dv();
 }
 
 void Simulation::set_dynamics_params(const DynamicsParams& p) {
@@ -217,12 +212,12 @@ void Simulation::step_shell(double dt) {
   if (strength_dirty_) {
     // Ash holds little together (Fig. 9's cloth sinks as it burns): a control vertex keeps
     // ash_strength of its springs' stiffness over the burnt share of the sheet it carries.
-    Eigen::VectorXd strength(control_area_.size());
-    for (Eigen::Index v = 0; v < strength.size(); ++v) {
+    strength_.resize(control_area_.size());
+    for (Eigen::Index v = 0; v < strength_.size(); ++v) {
       const double burnt = control_area_[v] > 0 ? std::min(1.0, burnt_area_[v] / control_area_[v]) : 0.0;
-      strength[v] = 1.0 - (1.0 - params_.ash_strength) * burnt;
+      strength_[v] = 1.0 - (1.0 - params_.ash_strength) * burnt;
     }
-    dynamics_->set_strength(strength);
+    dynamics_->set_strength(strength_);
     strength_dirty_ = false;
   }
   dynamics_->set_wind(wind_);

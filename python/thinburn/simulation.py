@@ -69,7 +69,7 @@ class Simulation:
           (flames climb: drive toward world-up, 0 = the paper's symmetric law),
           ``wind_spread`` (front drive per m/s of wind), ``max_drive``, ``ash_fraction``,
           ``ash_strength`` (share of the lattice's stiffness that burnt sheet keeps, 0.1: ash
-          holds little together, so a held cloth sinks as it burns, Fig. 9);
+          holds little together; docs/materials.md);
         * the bending (eqs 2-6): ``ct``, ``alpha``, ``beta``, ``d_min``, ``max_rotation``,
           ``heat_tolerance``, ``heat_fast``;
         * the motion: ``k_thickness``, ``k_transverse``, ``stiffness_unit``, ``buoyancy``,
@@ -81,7 +81,7 @@ class Simulation:
           solve's conjugate gradients ("auto", the default: a sparse LDL^T factorization, kept
           while it stays good, up to ``ldlt_max_vertices`` awake lattice vertices, couple-block
           Jacobi above; "ldlt"; "jacobi"), ``refactor_iterations``, ``wake_hold`` (steps a
-          vertex woken by its neighbours' motion stays awake);
+          vertex woken again soon after falling asleep stays awake, doubling per repeat);
         * the particles, prefixed ``particle_``: ``particle_capacity``,
           ``particle_birth_rate``, ``particle_temperature0``, ``particle_cooling``,
           ``particle_lifetime``, ``particle_lifetime_jitter``, ``particle_buoyancy``,
