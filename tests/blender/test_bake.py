@@ -276,15 +276,28 @@ def test_modal_bake_runs_on_timer_events_and_esc_cancels(addon, baked, tmp_path)
     assert status[-1] is None  # the status bar is given back
 
 
-def test_deleting_an_igniter_mid_bake_stops_cleanly(addon, baked, tmp_path):
+@pytest.mark.parametrize("worker_start_s", [0.0, 1.0])
+def test_deleting_an_igniter_mid_bake_stops_cleanly(addon, baked, tmp_path, monkeypatch,
+                                                     worker_start_s):
+    """Also with a worker slow to start (a loaded machine), when ticks find no frame to sample."""
+    run = addon.worker.CoreWorker.run
+    monkeypatch.setattr(addon.worker.CoreWorker, "run",
+                        lambda self: (time.sleep(worker_start_s), run(self)))
     path = tmp_path / "cache" / "Sheet.pc2"
     before = path.read_bytes()
     job = addon.job.BakeJob(bpy.context, baked)
     job.tick()
     bpy.data.objects.remove(bpy.data.objects["Igniter"])
-    with pytest.raises(addon.inputs.BakeError, match="'Igniter' was deleted"):
-        for _ in range(1000):
-            job.tick()
+    # Ticks return at once while the worker is still building its Simulation (no frame to
+    # sample yet), so bound the loop by time, not by a count that a loaded machine outruns.
+    deadline = time.perf_counter() + 120.0
+    try:
+        with pytest.raises(addon.inputs.BakeError, match="'Igniter' was deleted"):
+            while time.perf_counter() < deadline:
+                job.tick()
+    finally:
+        if not job.finished:
+            job.cancel()  # a failed check must not leak the open partial file
     assert job.finished and not job.worker.is_alive()
     assert path.read_bytes() == before and not (tmp_path / "cache" / "Sheet.pc2.partial").exists()
 
