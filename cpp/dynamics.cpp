@@ -8,8 +8,8 @@
 
 #include <Eigen/Geometry>
 #include <Eigen/LU>
-#include <Eigen/SparseCholesky>
 
+#include "block_ldlt.hpp"
 #include "crumple.hpp"
 #include "threads.hpp"
 
@@ -114,10 +114,11 @@ void validate(const DynamicsParams& p) {
           "wake_hold must be in [0, " + std::to_string(kMaxHold) + "]");
 }
 
-// The implicit system over the active vertices, lower triangle in compressed columns, and its
-// sparse LDL^T factorization, the conjugate gradients' preconditioner. The pattern depends only
-// on the active set: values are refilled in the order the pattern was built, and the symbolic
-// analysis (AMD ordering, elimination tree) is redone only when the active set changes. The
+// The implicit system over the active vertices, lower triangle of 3x3 blocks by columns, and its
+// sparse block LDL^T factorization (block_ldlt.hpp), the conjugate gradients' preconditioner.
+// The pattern depends only on the active set: values are refilled in the order the pattern was
+// built, and the symbolic analysis (AMD ordering, elimination tree) is redone only when the
+// active set changes. The
 // numeric factorization is kept over substeps and steps (masses, lengths and contacts change
 // slowly), and over changes of the active set, until a solve needs more than
 // refactor_iterations iterations or the active set has moved too far from the factored one.
@@ -128,9 +129,9 @@ struct LatticeDynamics::Factor {
   std::vector<int> blk_row;     // row slot of each block; the vertex itself (diagonal) first
   std::vector<int> blk_spring;  // the spring of an off-diagonal block, -1 on the diagonal
   std::vector<std::pair<int, int>> sort_buf;
-  Eigen::SparseMatrix<double> A;
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower> ldlt;
-  Eigen::VectorXd rhs, sol;
+  std::vector<double> values;   // 9 per block of blk_row, column-major
+  BlockLdlt ldlt;
+  Eigen::VectorXd rhs;
   bool analysed = false;  // ldlt holds the symbolic analysis of `active`
   bool valid = false;     // ldlt holds a numeric factorization of `active`'s system
   bool stale = false;     // the last solve took too many iterations: refactor before the next
@@ -840,11 +841,11 @@ void LatticeDynamics::precondition(const double* in, double* out) {
       for (int i = 0; i < 3; ++i) f.rhs[3 * fs + i] = in[3 * a + i];
       if (contact_(active_[a]) >= 0.0) f.rhs[3 * fs + 2] = 0.0;
     }
-    f.sol = f.ldlt.solve(f.rhs);
+    f.ldlt.solve(f.rhs.data());
     for (int a = 0; a < na; ++a) {
       const int fs = f.slot[active_[a]];
       if (fs >= 0)
-        vec3(out, a) = Eigen::Map<const Eigen::Vector3d>(f.sol.data() + 3 * fs);
+        vec3(out, a) = Eigen::Map<const Eigen::Vector3d>(f.rhs.data() + 3 * fs);
       else
         vec3(out, a) = mat3(B.pinv, 2 * a) * Eigen::Map<const Eigen::Vector3d>(in + 3 * a);
       if (contact_(active_[a]) >= 0.0) out[3 * a + 2] = 0.0;
@@ -892,52 +893,37 @@ void LatticeDynamics::factor_pattern() {
     }
     f.blk_start.push_back(static_cast<int>(f.blk_row.size()));
   }
-  // Column 3a+i holds, block by block, rows 3r+i' (i' >= i in the diagonal block).
-  const int N = 3 * na;
-  const int offdiag = static_cast<int>(f.blk_row.size()) - na;
-  f.A.resize(N, N);
-  f.A.resizeNonZeros(6 * na + 9 * offdiag);
-  int* outer = f.A.outerIndexPtr();
-  int* inner = f.A.innerIndexPtr();
-  int k = 0;
-  for (int a = 0; a < na; ++a)
-    for (int i = 0; i < 3; ++i) {
-      outer[3 * a + i] = k;
-      for (int b = f.blk_start[a]; b < f.blk_start[a + 1]; ++b)
-        for (int ii = (f.blk_row[b] == a ? i : 0); ii < 3; ++ii) inner[k++] = 3 * f.blk_row[b] + ii;
-    }
-  outer[N] = k;
-  f.rhs.resize(N);
-  f.sol.resize(N);
-  f.ldlt.analyzePattern(f.A);
+  f.values.resize(9 * f.blk_row.size());
+  f.rhs.resize(3 * na);
+  f.ldlt.analyze(na, f.blk_start, f.blk_row);
   f.analysed = true;
 }
 
 void LatticeDynamics::factor_fill(double h) {
   // A = M (1 + h c) + h W + h^2 J, with each floor contact's v_z row and column replaced by the
-  // identity, as the filtered conjugate gradients see it.
+  // identity, as the filtered conjugate gradients see it. Blocks are written column-major.
   Factor& f = *factor_;
   Buffers B = buffers(work_, sa_.size(), n_);
   const int na = static_cast<int>(active_.size());
   const double h2 = h * h;
   const int sym[3][3] = {{0, 3, 4}, {3, 1, 5}, {4, 5, 2}};  // store_sym's layout
-  double* val = f.A.valuePtr();
-  int k = 0;
   for (int a = 0; a < na; ++a) {
     const bool ca = contact_(active_[a]) >= 0.0;
-    for (int i = 0; i < 3; ++i) {
-      const bool fixed_col = ca && i == 2;
-      for (int b = f.blk_start[a]; b < f.blk_start[a + 1]; ++b) {
-        const int r = f.blk_row[b];
-        if (r == a) {
-          for (int ii = i; ii < 3; ++ii)
-            val[k++] = (fixed_col || (ca && ii == 2)) ? (ii == i ? 1.0 : 0.0) : mat3(B.diag, a)(ii, i);
-          continue;
-        }
-        const bool cr = contact_(active_[r]) >= 0.0;
-        const double* J = B.jac + 6 * f.blk_spring[b];
-        for (int ii = 0; ii < 3; ++ii) val[k++] = (fixed_col || (cr && ii == 2)) ? 0.0 : -h2 * J[sym[ii][i]];
+    for (int b = f.blk_start[a]; b < f.blk_start[a + 1]; ++b) {
+      const int r = f.blk_row[b];
+      const bool cr = contact_(active_[r]) >= 0.0;
+      double* val = f.values.data() + 9 * b;
+      if (r == a) {
+        const auto D = mat3(B.diag, a);
+        for (int i = 0; i < 3; ++i)
+          for (int ii = 0; ii < 3; ++ii)
+            val[3 * i + ii] = (ca && (i == 2 || ii == 2)) ? (ii == i ? 1.0 : 0.0) : D(ii, i);
+        continue;
       }
+      const double* J = B.jac + 6 * f.blk_spring[b];
+      for (int i = 0; i < 3; ++i)
+        for (int ii = 0; ii < 3; ++ii)
+          val[3 * i + ii] = ((ca && i == 2) || (cr && ii == 2)) ? 0.0 : -h2 * J[sym[ii][i]];
     }
   }
 }
@@ -955,10 +941,10 @@ void LatticeDynamics::refresh_factor(double h) {
   }
   factor_pattern();
   factor_fill(h);
-  f.ldlt.factorize(f.A);
+  // A failure is not expected (A is symmetric positive definite); the solve then falls back to
+  // Jacobi.
+  f.valid = f.ldlt.factorize(f.values.data());
   ++factorizations_;
-  // Not expected (A is symmetric positive definite); the solve then falls back to Jacobi.
-  f.valid = f.ldlt.info() == Eigen::Success;
   f.stale = false;
 }
 

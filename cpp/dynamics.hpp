@@ -64,7 +64,7 @@ struct DynamicsParams {
   double cg_velocity_tolerance = 1e-7;  ///< m/s: absolute floor of the CG stopping test
   int cg_max_iterations = 2000;
   Preconditioner preconditioner = Preconditioner::Auto;
-  int ldlt_max_vertices = 300;     ///< Auto: the largest awake set given the Ldlt preconditioner
+  int ldlt_max_vertices = 600;     ///< Auto: the largest awake set given the Ldlt preconditioner
   int refactor_iterations = 8;     ///< Ldlt: a solve taking more iterations refactors for the next one
 };
 

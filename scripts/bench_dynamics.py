@@ -4,6 +4,7 @@ convergence orders of the integrators against theory. Prints and writes JSON.
 
     python scripts/bench_dynamics.py [--sizes 8 16 32 64] [--frames 12] [--threads 1]
                                      [--out bench_dynamics.json] [--no-theory] [--wake-hold 12]
+                                     [--ldlt-max-vertices N]
 """
 from __future__ import annotations
 
@@ -24,12 +25,14 @@ SIDE, THICKNESS, DENSITY, DT = 0.3, 0.002, 0.08, 1 / 24
 
 
 def hot_spot_run(M: int, sleeping: bool, frames: int, integrator: str = "implicit",
-                 wake_hold: int = 12) -> dict:
+                 wake_hold: int = 12, ldlt_max_vertices: int | None = None) -> dict:
     """A SIDE x SIDE paper sheet on a table; from frame 3 one couple at the centre turns by
     0.02 rad per frame (a small hot spot). Times the steps after the sheet settled."""
     lat = _core.FfdLattice(M, flat_rest(M, SIDE, SIDE, THICKNESS, (-SIDE / 2, -SIDE / 2, 0.0)))
     dyn = _core.LatticeDynamics(lat, sleeping=sleeping, has_floor=True, floor_z=-THICKNESS / 2,
-                                integrator=integrator, wake_hold=wake_hold)
+                                integrator=integrator, wake_hold=wake_hold,
+                                **({} if ldlt_max_vertices is None
+                                   else dict(ldlt_max_vertices=ldlt_max_vertices)))
     dyn.set_masses(vertex_masses(M, SIDE * SIDE, DENSITY))
     D, heat = np.zeros(M * M), np.zeros(2 * M * M)
     centre = (M // 2) * M + M // 2
@@ -119,6 +122,8 @@ def main() -> None:
     ap.add_argument("--out", default="bench_dynamics.json")
     ap.add_argument("--no-theory", action="store_true")
     ap.add_argument("--wake-hold", type=int, default=12, help="LatticeDynamics wake_hold (steps)")
+    ap.add_argument("--ldlt-max-vertices", type=int, default=None,
+                    help="LatticeDynamics ldlt_max_vertices (default: the core's)")
     args = ap.parse_args()
     thinburn.set_threads(args.threads)
     result = dict(machine=platform.processor() or platform.machine(), threads=args.threads,
@@ -129,7 +134,8 @@ def main() -> None:
     for M in args.sizes:
         ref = None
         for sleeping in (False, True):
-            r = hot_spot_run(M, sleeping, args.frames, wake_hold=args.wake_hold)
+            r = hot_spot_run(M, sleeping, args.frames, wake_hold=args.wake_hold,
+                             ldlt_max_vertices=args.ldlt_max_vertices)
             pos = r.pop("positions")
             if ref is None:
                 ref = pos

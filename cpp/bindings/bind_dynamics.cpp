@@ -5,6 +5,7 @@
 #include <string>
 
 #include "bindings.hpp"
+#include "block_ldlt.hpp"
 #include "crumple.hpp"
 #include "dynamics.hpp"
 
@@ -268,6 +269,38 @@ void define_dynamics(py::module_& m) {
       },
       "M"_a, "positions"_a, "delta"_a, "pinned"_a,
       "Chord displacement of every control vertex for per-couple rotation increments (eqs 7-8).");
+  m.def(
+      "block_ldlt_solve",
+      [](int n, const std::vector<int>& col_start, const std::vector<int>& rows,
+         const py::array_t<double, py::array::c_style | py::array::forcecast>& blocks,
+         const Eigen::VectorXd& rhs) {
+        if (blocks.ndim() != 3 || blocks.shape(0) != py::ssize_t(rows.size()) || blocks.shape(1) != 3 ||
+            blocks.shape(2) != 3)
+          throw std::invalid_argument("blocks must have shape (len(rows), 3, 3)");
+        if (rhs.size() != 3 * py::ssize_t(n)) throw std::invalid_argument("rhs must have 3*n entries");
+        // Column-major blocks, as BlockLdlt reads them.
+        std::vector<double> values(9 * rows.size());
+        auto b = blocks.unchecked<3>();
+        for (py::ssize_t q = 0; q < b.shape(0); ++q)
+          for (int r = 0; r < 3; ++r)
+            for (int c = 0; c < 3; ++c) values[9 * q + 3 * c + r] = b(q, r, c);
+        Eigen::VectorXd x = rhs;
+        int fill = 0;
+        {
+          py::gil_scoped_release release;
+          BlockLdlt f;
+          f.analyze(n, col_start, rows);
+          if (!f.factorize(values.data())) throw std::invalid_argument("the matrix is not positive definite");
+          f.solve(x.data());
+          fill = f.off_diagonal_blocks();
+        }
+        return py::make_tuple(x, fill);
+      },
+      "n"_a, "col_start"_a, "rows"_a, "blocks"_a, "rhs"_a,
+      "Solve A x = rhs by the block LDL^T of the implicit solve's preconditioner. A is symmetric,\n"
+      "of n x n blocks of 3x3, given by its lower triangle: column j's blocks have rows\n"
+      "rows[col_start[j]:col_start[j+1]] (>= j; list the diagonal). Returns (x, off-diagonal\n"
+      "blocks of L, the fill-in included).");
 }
 
 }  // namespace thinburn::bind
