@@ -25,7 +25,7 @@ enum class Integrator {
 /// @brief Preconditioner of the implicit integrator's conjugate gradients.
 enum class Preconditioner {
   Auto,   ///< Ldlt up to ldlt_max_vertices awake vertices, Jacobi above
-  Ldlt,   ///< a sparse LDL^T factorization of the system, kept over substeps and steps until it goes stale
+  Ldlt,   ///< a sparse block LDL^T factorization of the system (block_ldlt.hpp), kept until it goes stale
   Jacobi  ///< couple-block Jacobi (each couple's 6 x 6 block inverted), rebuilt every substep
 };
 
@@ -81,7 +81,7 @@ struct StepStats {
   int substeps = 0;       ///< substeps taken
   int awake = 0;          ///< vertices integrated
   int cg_iterations = 0;  ///< conjugate-gradient iterations, all substeps and passes
-  int factorizations = 0; ///< sparse LDL^T factorizations (Ldlt preconditioner), all substeps and passes
+  int factorizations = 0; ///< block LDL^T factorizations (Ldlt preconditioner), all substeps and passes
   double omega_max = 0;   ///< rad/s, bound on the largest frequency of the awake lattice
   int passes = 0;         ///< integrations of the step (> 1 when it woke sleepers and redid it)
 };

@@ -78,8 +78,8 @@ class Simulation:
           False: the paper's prescribed chord motion), ``sleep_speed``,
           ``sleeping``, ``substeps``, ``max_substeps``, ``safety``, ``max_stretch``,
           ``cg_tolerance``, ``cg_max_iterations``, ``gravity``, ``preconditioner`` of the implicit
-          solve's conjugate gradients ("auto", the default: a sparse LDL^T factorization, kept
-          while it stays good, up to ``ldlt_max_vertices`` awake lattice vertices, couple-block
+          solve's conjugate gradients ("auto", the default: a sparse block LDL^T factorization, kept
+          while it stays good, up to ``ldlt_max_vertices`` (600) awake lattice vertices, couple-block
           Jacobi above; "ldlt"; "jacobi"), ``refactor_iterations``, ``wake_hold`` (steps a
           vertex woken again soon after falling asleep stays awake, doubling per repeat);
         * the particles, prefixed ``particle_``: ``particle_capacity``,
