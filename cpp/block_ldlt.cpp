@@ -15,6 +15,7 @@ using Block = Eigen::Matrix3d;
 // Fill-reducing order of the block graph: Eigen's approximate minimum degree. Returns
 // perm[new] = old.
 std::vector<int> amd_order(int n, const std::vector<int>& col_start, const std::vector<int>& rows) {
+  if (n == 0) return {};
   std::vector<Eigen::Triplet<double>> t;
   t.reserve(2 * rows.size() + n);
   for (int j = 0; j < n; ++j) {

@@ -553,6 +553,11 @@ def random_spd_blocks(n, density, seed):
     return A + np.eye(3 * n) * (np.abs(A).sum(axis=1).max() + 1.0)
 
 
+def test_block_ldlt_of_an_empty_system_is_empty():
+    x, fill = _core.block_ldlt_solve(0, [0], [], np.zeros((0, 3, 3)), np.zeros(0))
+    assert x.shape == (0,) and fill == 0
+
+
 @pytest.mark.parametrize("n, density", [(1, 0.0), (2, 1.0), (12, 0.0), (40, 0.1), (60, 1.0)])
 def test_block_ldlt_solves_spd_block_systems(n, density):
     A = random_spd_blocks(n, density, seed=n)
