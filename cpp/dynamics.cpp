@@ -118,10 +118,10 @@ void validate(const DynamicsParams& p) {
 // sparse block LDL^T factorization (block_ldlt.hpp), the conjugate gradients' preconditioner.
 // The pattern depends only on the active set: values are refilled in the order the pattern was
 // built, and the symbolic analysis (AMD ordering, elimination tree) is redone only when the
-// active set changes. The
-// numeric factorization is kept over substeps and steps (masses, lengths and contacts change
-// slowly), and over changes of the active set, until a solve needs more than
-// refactor_iterations iterations or the active set has moved too far from the factored one.
+// active set changes. The numeric factorization is kept over substeps and steps (masses,
+// lengths and contacts change slowly), and over changes of the active set, until a solve needs
+// more than refactor_iterations iterations or the active set has moved too far from the
+// factored one.
 struct LatticeDynamics::Factor {
   std::vector<int> active;      // the active set the pattern was built for
   std::vector<int> slot;        // per vertex: its position in `active`, -1 if not in it
