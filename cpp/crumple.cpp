@@ -58,7 +58,7 @@ void crumple_displacements(int M, const RowMatX3& pos, const Eigen::VectorXd& de
   const int n = 2 * M * M;
   out.resize(n, 3);
 #ifdef THINBURN_HAVE_OPENMP
-#pragma omp parallel for num_threads(thinburn::num_threads()) schedule(static)
+#pragma omp parallel for num_threads(thinburn::num_threads()) schedule(static) if (thinburn::worth_threads(64L * n))
 #endif
   for (int v = 0; v < n; ++v) {
     Eigen::Vector3d d = Eigen::Vector3d::Zero();

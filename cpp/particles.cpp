@@ -190,7 +190,7 @@ void ParticleSystem::step(double dt, const Eigen::Vector3d& wind) {
   const std::uint64_t seed = params_.seed;
   const int n = count_;
 #ifdef THINBURN_HAVE_OPENMP
-#pragma omp parallel for num_threads(thinburn::num_threads()) schedule(static)
+#pragma omp parallel for num_threads(thinburn::num_threads()) schedule(static) if (thinburn::worth_threads(64L * n))
 #endif
   for (int i = 0; i < n; ++i) {
     const double g = lift * temp_(i);

@@ -7,6 +7,15 @@
 
 namespace thinburn {
 
+/// @brief Loops with less work than this (in units of a few flops: items times their inner
+/// size) run on one thread. Starting and joining a team costs microseconds, and much more when
+/// the other core is busy (a team member waits for the scheduler); the small loops of a
+/// 128-cell frame gain nothing from a second thread.
+constexpr long kParallelWork = 1L << 15;
+
+/// @brief Whether a loop of `work` units is worth a team of threads.
+inline bool worth_threads(long work) { return work >= kParallelWork; }
+
 /// @brief Whether the core was built with OpenMP.
 bool has_openmp();
 
