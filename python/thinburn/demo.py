@@ -110,7 +110,10 @@ def run_demo(out_dir, material="paper", cells=128, fps=24.0, max_time=240.0, fra
                 _record(sim, states, store, particle_frames)
                 images.append(_picture(sim, states, renderer, material, aspect))
             if progress is not None:
-                progress.update(min(step, expected_steps - (not done)) if not done else expected_steps,
+                if not done and step >= progress.total:
+                    # The fire outlasts the estimate (a curled sheet slows it): count to the cap.
+                    progress.total = max(progress.total, int(np.ceil(max_time / dt)))
+                progress.update(progress.total if done else step,
                                 f"t={sim.time:6.1f}s burning={int(np.sum(states == 1))}")
             if done:
                 break
