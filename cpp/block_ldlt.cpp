@@ -37,9 +37,12 @@ std::vector<int> amd_order(int n, const std::vector<int>& col_start, const std::
 void BlockLdlt::analyze(int n, const std::vector<int>& col_start, const std::vector<int>& rows) {
   if (n < 0 || static_cast<int>(col_start.size()) != n + 1 || col_start[n] != static_cast<int>(rows.size()))
     throw std::invalid_argument("BlockLdlt::analyze: col_start must have n + 1 entries ending at rows.size()");
-  for (int j = 0; j < n; ++j)
+  if (col_start[0] != 0) throw std::invalid_argument("BlockLdlt::analyze: col_start must start at 0");
+  for (int j = 0; j < n; ++j) {
+    if (col_start[j + 1] < col_start[j]) throw std::invalid_argument("BlockLdlt::analyze: col_start must not decrease");
     for (int q = col_start[j]; q < col_start[j + 1]; ++q)
       if (rows[q] < j || rows[q] >= n) throw std::invalid_argument("BlockLdlt::analyze: a row outside [j, n)");
+  }
   n_ = n;
   perm_ = amd_order(n, col_start, rows);
   std::vector<int> inv(n);

@@ -597,6 +597,16 @@ def test_block_ldlt_rejects_what_it_cannot_factor():
         _core.block_ldlt_solve(5, col_start, rows, blocks, np.ones(14))
     with pytest.raises(ValueError, match="blocks must have shape"):
         _core.block_ldlt_solve(5, col_start, rows, blocks[:-1], np.ones(15))
+    with pytest.raises(ValueError, match="blocks must be finite"):
+        _core.block_ldlt_solve(5, col_start, rows, np.where(blocks == blocks.max(), np.nan, blocks), np.ones(15))
+    with pytest.raises(ValueError, match="rhs must be finite"):
+        _core.block_ldlt_solve(5, col_start, rows, blocks, np.full(15, np.inf))
+    with pytest.raises(ValueError, match="must start at 0"):
+        _core.block_ldlt_solve(5, [1] + col_start[1:], rows, blocks, np.ones(15))
+    with pytest.raises(ValueError, match="must not decrease"):
+        _core.block_ldlt_solve(5, [0, 3, 1] + col_start[3:], rows, blocks, np.ones(15))
+    with pytest.raises(ValueError, match=r"n \+ 1 entries"):
+        _core.block_ldlt_solve(5, col_start[:-1], rows, blocks, np.ones(15))
     bad_rows = list(rows)
     bad_rows[-1] = 0  # a row above the diagonal of the last column
     with pytest.raises(ValueError, match="a row outside"):

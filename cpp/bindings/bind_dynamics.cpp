@@ -2,6 +2,7 @@
 #include <pybind11/numpy.h>
 #include <pybind11/stl.h>
 
+#include <cmath>
 #include <string>
 
 #include "bindings.hpp"
@@ -278,12 +279,16 @@ void define_dynamics(py::module_& m) {
             blocks.shape(2) != 3)
           throw std::invalid_argument("blocks must have shape (len(rows), 3, 3)");
         if (rhs.size() != 3 * py::ssize_t(n)) throw std::invalid_argument("rhs must have 3*n entries");
+        if (!rhs.allFinite()) throw std::invalid_argument("rhs must be finite");
         // Column-major blocks, as BlockLdlt reads them.
         std::vector<double> values(9 * rows.size());
         auto b = blocks.unchecked<3>();
         for (py::ssize_t q = 0; q < b.shape(0); ++q)
           for (int r = 0; r < 3; ++r)
-            for (int c = 0; c < 3; ++c) values[9 * q + 3 * c + r] = b(q, r, c);
+            for (int c = 0; c < 3; ++c) {
+              if (!std::isfinite(b(q, r, c))) throw std::invalid_argument("blocks must be finite");
+              values[9 * q + 3 * c + r] = b(q, r, c);
+            }
         Eigen::VectorXd x = rhs;
         int fill = 0;
         {
