@@ -218,7 +218,7 @@ class LatticeDynamics {
   std::vector<double> rest_save_;
   std::unique_ptr<Factor> factor_;
   int factorizations_ = 0;          // of the step in progress
-  bool precond_ldlt_ = false;       // the solve in progress uses factor_   // sparse factorization of the implicit system, reused
+  bool precond_ldlt_ = false;       // the solve in progress uses factor_
 };
 
 }  // namespace thinburn

@@ -165,7 +165,7 @@ void define_dynamics(py::module_& m) {
       .def_readonly("substeps", &StepStats::substeps)
       .def_readonly("awake", &StepStats::awake, "Vertices integrated.")
       .def_readonly("cg_iterations", &StepStats::cg_iterations)
-      .def_readonly("factorizations", &StepStats::factorizations, "Sparse LDL^T factorizations (Ldlt preconditioner).")
+      .def_readonly("factorizations", &StepStats::factorizations, "Block LDL^T factorizations (Ldlt preconditioner).")
       .def_readonly("omega_max", &StepStats::omega_max, "rad/s, bound on the largest frequency.")
       .def_readonly("passes", &StepStats::passes)
       .def("__repr__", [](const StepStats& s) {

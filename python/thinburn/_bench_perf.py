@@ -394,9 +394,7 @@ def plot_performance(rows, path):
                  fontsize=9)
     ax.grid(True, axis="y", which="both", alpha=0.3)
     ax.legend(fontsize=7, loc="upper left")
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path)
 
 
 def plot_scaling(rows, path):
@@ -473,9 +471,14 @@ def plot_scaling(rows, path):
     ax.set_title("flat = the cost follows the active work, not N²", fontsize=9)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7)
+    save_figure(fig, path)
+
+
+def save_figure(fig, path) -> None:
+    """Lay out, write (110 dpi, every chart of the bench) and close a matplotlib figure."""
     fig.tight_layout()
     fig.savefig(path, dpi=110)
-    plt.close(fig)
+    _pyplot().close(fig)
 
 
 PERF_PARTS = ("ffd", "frames", "scaling", "active")

@@ -306,9 +306,7 @@ def plot_speed_accuracy(rows, path):
         ax.set_title(titles[part], fontsize=9)
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    perf.save_figure(fig, path)
 
 
 def plot_stability(rows, path):
@@ -341,9 +339,7 @@ def plot_stability(rows, path):
     ax.set_title("integrator stability (undamped, bisection over 200 steps)", fontsize=9)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    perf.save_figure(fig, path)
 
 
 # ---------------------------------------------------------------- driver
