@@ -57,10 +57,8 @@ void crumple_displacements(int M, const RowMatX3& pos, const Eigen::VectorXd& de
   const Grid g{M, pos};
   const int n = 2 * M * M;
   out.resize(n, 3);
-#ifdef THINBURN_HAVE_OPENMP
-#pragma omp parallel for num_threads(thinburn::num_threads()) schedule(static) if (thinburn::worth_threads(64L * n))
-#endif
-  for (int v = 0; v < n; ++v) {
+  parallel_for(0, n, 64, [&](long v_) {
+    const int v = static_cast<int>(v_);
     Eigen::Vector3d d = Eigen::Vector3d::Zero();
     const int c = v / 2, i = c / M, j = c % M;
     if (!pinned[v]) {
@@ -76,7 +74,7 @@ void crumple_displacements(int M, const RowMatX3& pos, const Eigen::VectorXd& de
       }
     }
     out.row(v) = d.transpose();
-  }
+  });
 }
 
 }  // namespace thinburn

@@ -17,7 +17,11 @@ namespace thinburn {
 namespace {
 
 constexpr int kDotChunk = 4096;
-constexpr int kParallelMin = 1024;  // below this many items a loop runs on one thread
+// Work per item, in kParallelWork's units (threads.hpp): a vertex's or a spring's row of
+// forces, Jacobian or CG product is about 32; one entry of an axpy about 11. So a loop over
+// fewer than about 1000 vertices, or an axpy over fewer than 3000 entries, stays on one thread.
+constexpr long kRowCost = 32;
+constexpr long kAxpyCost = 11;
 constexpr int kMaxPasses = 4;
 constexpr int kRedoShare = 16;   // a step is redone when it stresses awake over 1/16 of its awake count
 constexpr int kSleepShare = 10;  // vertices fall asleep only when over 1/10 of the awake set is quiet
@@ -229,16 +233,14 @@ void LatticeDynamics::apply_bimetal(const Eigen::VectorXd& D, bool all) {
   // Rest lengths are a function of D alone (not of the path), so the springs never carry the
   // history of earlier crumples; only springs touching a couple whose D changed are recomputed.
   const int ns = static_cast<int>(sa_.size());
-#ifdef THINBURN_HAVE_OPENMP
-#pragma omp parallel for num_threads(thinburn::num_threads()) schedule(static) if (ns > kParallelMin)
-#endif
-  for (int s = 0; s < ns; ++s) {
+  parallel_for(0, ns, kRowCost, [&](long s_) {
+    const int s = static_cast<int>(s_);
     const int ca = sa_[s] / 2, cb = sb_[s] / 2;
-    if (ca == cb) continue;  // a couple's own thickness spring keeps its length
-    if (!all && delta_(ca) == 0.0 && delta_(cb) == 0.0) continue;
+    if (ca == cb) return;  // a couple's own thickness spring keeps its length
+    if (!all && delta_(ca) == 0.0 && delta_(cb) == 0.0) return;
     const double kappa = 0.5 * p_.crumple_gain * (D(ca) / couple_spacing_(ca) + D(cb) / couple_spacing_(cb));
     rest_len_[s] = base_len_[s] * bimetal_ratio(s, kappa);
-  }
+  });
 }
 
 void LatticeDynamics::build_springs() {
@@ -332,6 +334,22 @@ void LatticeDynamics::set_params(const DynamicsParams& p) {
   if (p.bimetal && (!o.bimetal || o.crumple_gain != p.crumple_gain)) bimetal_all_ = true;
   p_ = p;
   if (moved) std::fill(awake_.begin(), awake_.end(), 1);
+}
+
+LatticeDynamics::Checkpoint LatticeDynamics::checkpoint() const {
+  return Checkpoint{mass_, strength_, spring_scale_, awake_, hold_, hold_len_, vel_, accel_, wind_};
+}
+
+void LatticeDynamics::rollback(Checkpoint&& c) {
+  mass_ = std::move(c.mass);
+  strength_ = std::move(c.strength);
+  spring_scale_ = std::move(c.spring_scale);
+  awake_ = std::move(c.awake);
+  hold_ = std::move(c.hold);
+  hold_len_ = std::move(c.hold_len);
+  vel_ = std::move(c.vel);
+  accel_ = std::move(c.accel);
+  wind_ = c.wind;
 }
 
 void LatticeDynamics::set_masses(const Eigen::VectorXd& m) {
@@ -516,15 +534,13 @@ Buffers buffers(std::vector<double>& w, std::size_t ns, std::size_t n) {
 // Sum of a[i] * b[i] in fixed chunks summed in order: the same bits for any thread count.
 double det_dot(const double* a, const double* b, int len, double* partial) {
   const int chunks = (len + kDotChunk - 1) / kDotChunk;
-#ifdef THINBURN_HAVE_OPENMP
-#pragma omp parallel for num_threads(thinburn::num_threads()) schedule(static) if (chunks > 1)
-#endif
-  for (int c = 0; c < chunks; ++c) {
+  parallel_for(0, chunks, kDotChunk, [&](long c_) {
+    const int c = static_cast<int>(c_);
     double s = 0.0;
     const int end = std::min(len, (c + 1) * kDotChunk);
     for (int i = c * kDotChunk; i < end; ++i) s += a[i] * b[i];
     partial[c] = s;
-  }
+  });
   double t = 0.0;
   for (int c = 0; c < chunks; ++c) t += partial[c];
   return t;
@@ -598,16 +614,14 @@ void LatticeDynamics::wake_around_forcing() {
 void LatticeDynamics::apply_plasticity() {
   const RowMatX3& x = lat_.positions();
   const int ns = static_cast<int>(sa_.size());
-#ifdef THINBURN_HAVE_OPENMP
-#pragma omp parallel for num_threads(thinburn::num_threads()) schedule(static) if (ns > kParallelMin)
-#endif
-  for (int s = 0; s < ns; ++s) {
+  parallel_for(0, ns, kRowCost, [&](long s_) {
+    const int s = static_cast<int>(s_);
     const int a = sa_[s], b = sb_[s];
-    if (disp_.row(a).squaredNorm() == 0.0 && disp_.row(b).squaredNorm() == 0.0) continue;
+    if (disp_.row(a).squaredNorm() == 0.0 && disp_.row(b).squaredNorm() == 0.0) return;
     const double before = (x.row(b) - x.row(a)).norm();
     const double after = (x.row(b) + disp_.row(b) - x.row(a) - disp_.row(a)).norm();
     rest_len_[s] = std::max(0.0, rest_len_[s] + p_.plasticity * (after - before));
-  }
+  });
 }
 
 int LatticeDynamics::choose_substeps(double dt, double omega, double c_eff) const {
@@ -644,23 +658,19 @@ void LatticeDynamics::explicit_substep(double h, bool paper) {
   Buffers B = buffers(work_, sa_.size(), n_);
   RowMatX3& x = lat_.positions();
   const int na = static_cast<int>(active_.size());
-#ifdef THINBURN_HAVE_OPENMP
-#pragma omp parallel for num_threads(thinburn::num_threads()) schedule(static) if (na > kParallelMin)
-#endif
-  for (int a = 0; a < na; ++a) {
+  parallel_for(0, na, kRowCost, [&](long a_) {
+    const int a = static_cast<int>(a_);
     const int v = active_[a];
     vec3(B.f, a) = vertex_force(v, x, vel_) / mass_(v);
-  }
-#ifdef THINBURN_HAVE_OPENMP
-#pragma omp parallel for num_threads(thinburn::num_threads()) schedule(static) if (na > kParallelMin)
-#endif
-  for (int a = 0; a < na; ++a) {
+  });
+  parallel_for(0, na, kRowCost, [&](long a_) {
+    const int a = static_cast<int>(a_);
     const int v = active_[a];
     const Eigen::Vector3d acc = vec3(B.f, a);
     vel_.row(v) += h * acc.transpose();
     x.row(v) += h * (vel_.row(v) + drift_.row(v));
     if (paper) x.row(v) += 0.5 * h * h * acc.transpose();
-  }
+  });
 }
 
 void LatticeDynamics::implicit_assemble(double h) {
@@ -670,10 +680,8 @@ void LatticeDynamics::implicit_assemble(double h) {
   const double h2 = h * h;
   // Jacobian blocks (clamped to positive semidefinite) of springs touching active vertices;
   // each spring is computed by its smallest-index active endpoint.
-#ifdef THINBURN_HAVE_OPENMP
-#pragma omp parallel for num_threads(thinburn::num_threads()) schedule(static) if (na > kParallelMin)
-#endif
-  for (int a = 0; a < na; ++a) {
+  parallel_for(0, na, kRowCost, [&](long a_) {
+    const int a = static_cast<int>(a_);
     const int v = active_[a];
     for (int q = inc_start_[v]; q < inc_start_[v + 1]; ++q) {
       const int s = inc_spring_[q], o = inc_other_[q];
@@ -681,16 +689,14 @@ void LatticeDynamics::implicit_assemble(double h) {
       const Eigen::Vector3d d = (x.row(o) - x.row(v)).transpose();
       store_sym(B.jac + 6 * s, spring_block(d, spring_k(s), rest_len_[s], true));
     }
-  }
+  });
   // Floor contact: a vertex on the floor that would move into it keeps v_z = 0 in this substep
   // (a filtered DOF of the conjugate gradients); implicit_substep adds the vertices that the
   // solution takes below the floor. Forces and the diagonal blocks of
   // A = M (1 + h c) + h W + h^2 J; every contact is decided before any right-hand side reads
   // a neighbour's drift (substep_drift).
-#ifdef THINBURN_HAVE_OPENMP
-#pragma omp parallel for num_threads(thinburn::num_threads()) schedule(static) if (na > kParallelMin)
-#endif
-  for (int a = 0; a < na; ++a) {
+  parallel_for(0, na, kRowCost, [&](long a_) {
+    const int a = static_cast<int>(a_);
     const int v = active_[a];
     const Eigen::Vector3d f = vertex_force(v, x, vel_);
     vec3(B.f, a) = f;
@@ -707,7 +713,7 @@ void LatticeDynamics::implicit_assemble(double h) {
     for (int q = inc_start_[v]; q < inc_start_[v + 1]; ++q)
       D += h2 * load_sym(B.jac + 6 * inc_spring_[q]);
     mat3(B.diag, a) = D;
-  }
+  });
   implicit_rhs(h);
 }
 
@@ -717,15 +723,13 @@ void LatticeDynamics::build_jacobi(double h) {
   const double h2 = h * h;
   // Couple-block Jacobi: the top-bottom spring is the stiffest, so both vertices of a couple are
   // inverted together (6 x 6); a vertex whose partner is not active gets its 3 x 3 inverse.
-#ifdef THINBURN_HAVE_OPENMP
-#pragma omp parallel for num_threads(thinburn::num_threads()) schedule(static) if (na > kParallelMin)
-#endif
-  for (int a = 0; a < na; ++a) {
+  parallel_for(0, na, kRowCost, [&](long a_) {
+    const int a = static_cast<int>(a_);
     const int v = active_[a], pa = slot_[v ^ 1];
     if (pa < 0) {
       mat3(B.pinv, 2 * a) = mat3(B.diag, a).inverse();
       mat3(B.pinv, 2 * a + 1).setZero();
-      continue;
+      return;
     }
     Eigen::Matrix<double, 6, 6> C;
     const Eigen::Matrix3d J = load_sym(B.jac + 6 * vert_spring_[v / 2]);
@@ -736,7 +740,7 @@ void LatticeDynamics::build_jacobi(double h) {
     const Eigen::Matrix<double, 6, 6> Ci = C.inverse();
     mat3(B.pinv, 2 * a) = Ci.topLeftCorner<3, 3>();
     mat3(B.pinv, 2 * a + 1) = Ci.topRightCorner<3, 3>();
-  }
+  });
 }
 
 Eigen::Vector3d LatticeDynamics::substep_drift(int v, double h) const {
@@ -757,10 +761,8 @@ void LatticeDynamics::implicit_rhs(double h) {
   // b = h (f + h K w), w = v + substep drift: K w is the force change along the motion.
   Buffers B = buffers(work_, sa_.size(), n_);
   const int na = static_cast<int>(active_.size());
-#ifdef THINBURN_HAVE_OPENMP
-#pragma omp parallel for num_threads(thinburn::num_threads()) schedule(static) if (na > kParallelMin)
-#endif
-  for (int a = 0; a < na; ++a) {
+  parallel_for(0, na, kRowCost, [&](long a_) {
+    const int a = static_cast<int>(a_);
     const int v = active_[a];
     const Eigen::Vector3d wv = vel_.row(v).transpose() + substep_drift(v, h);
     Eigen::Vector3d Kw = Eigen::Vector3d::Zero();
@@ -771,7 +773,7 @@ void LatticeDynamics::implicit_rhs(double h) {
     }
     vec3(B.b, a) = h * (vec3(B.f, a) + h * Kw);
     if (contact_(v) >= 0.0) B.b[3 * a + 2] = 0.0;
-  }
+  });
 }
 
 bool LatticeDynamics::add_landings(double h) {
@@ -811,10 +813,8 @@ void LatticeDynamics::apply_A(double h, const double* in, double* out) {
   Buffers B = buffers(work_, sa_.size(), n_);
   const int na = static_cast<int>(active_.size());
   const double h2 = h * h;
-#ifdef THINBURN_HAVE_OPENMP
-#pragma omp parallel for num_threads(thinburn::num_threads()) schedule(static) if (na > kParallelMin)
-#endif
-  for (int a = 0; a < na; ++a) {
+  parallel_for(0, na, kRowCost, [&](long a_) {
+    const int a = static_cast<int>(a_);
     const int v = active_[a];
     Eigen::Vector3d y = mat3(B.diag, a) * Eigen::Map<const Eigen::Vector3d>(in + 3 * a);
     for (int q = inc_start_[v]; q < inc_start_[v + 1]; ++q) {
@@ -823,7 +823,7 @@ void LatticeDynamics::apply_A(double h, const double* in, double* out) {
         y -= h2 * load_sym(B.jac + 6 * inc_spring_[q]) * Eigen::Map<const Eigen::Vector3d>(in + 3 * so);
     }
     vec3(out, a) = y;
-  }
+  });
 }
 
 void LatticeDynamics::precondition(const double* in, double* out) {
@@ -852,16 +852,14 @@ void LatticeDynamics::precondition(const double* in, double* out) {
     }
     return;
   }
-#ifdef THINBURN_HAVE_OPENMP
-#pragma omp parallel for num_threads(thinburn::num_threads()) schedule(static) if (na > kParallelMin)
-#endif
-  for (int a = 0; a < na; ++a) {
+  parallel_for(0, na, kRowCost, [&](long a_) {
+    const int a = static_cast<int>(a_);
     const int v = active_[a], pa = slot_[v ^ 1];
     Eigen::Vector3d y = mat3(B.pinv, 2 * a) * Eigen::Map<const Eigen::Vector3d>(in + 3 * a);
     if (pa >= 0) y += mat3(B.pinv, 2 * a + 1) * Eigen::Map<const Eigen::Vector3d>(in + 3 * pa);
     if (contact_(v) >= 0.0) y.z() = 0.0;  // the filter of Baraff and Witkin's modified PCG
     vec3(out, a) = y;
-  }
+  });
 }
 
 bool LatticeDynamics::use_ldlt() const {
@@ -963,10 +961,7 @@ int LatticeDynamics::implicit_solve(double h) {
   }
   const int N = 3 * na;
   auto axpy = [&](double alpha, const double* xv, double* y) {  // y += alpha x
-#ifdef THINBURN_HAVE_OPENMP
-#pragma omp parallel for num_threads(thinburn::num_threads()) schedule(static) if (N > 3 * kParallelMin)
-#endif
-    for (int i = 0; i < N; ++i) y[i] += alpha * xv[i];
+    parallel_for(0, N, kAxpyCost, [&](long i) { y[i] += alpha * xv[i]; });
   };
   // Modified PCG (Baraff and Witkin 1998) from the start value in B.dv: constrained DOFs start
   // at their prescribed value (v_z -> 0) and every search direction is filtered to leave them
@@ -1003,10 +998,7 @@ int LatticeDynamics::implicit_solve(double h) {
       const double rz_new = det_dot(B.r, B.z, N, B.partial);
       const double beta = rz_new / rz;
       rz = rz_new;
-#ifdef THINBURN_HAVE_OPENMP
-#pragma omp parallel for num_threads(thinburn::num_threads()) schedule(static) if (N > 3 * kParallelMin)
-#endif
-      for (int i = 0; i < N; ++i) B.p[i] = B.z[i] + beta * B.p[i];
+      parallel_for(0, N, kAxpyCost, [&](long i) { B.p[i] = B.z[i] + beta * B.p[i]; });
     }
   }
   if (precond_ldlt_ && iterations > p_.refactor_iterations) factor_->stale = true;
@@ -1033,10 +1025,8 @@ int LatticeDynamics::implicit_substep(double h) {
     implicit_rhs(h);
     iterations += implicit_solve(h);
   }
-#ifdef THINBURN_HAVE_OPENMP
-#pragma omp parallel for num_threads(thinburn::num_threads()) schedule(static) if (na > kParallelMin)
-#endif
-  for (int a = 0; a < na; ++a) {
+  parallel_for(0, na, kRowCost, [&](long a_) {
+    const int a = static_cast<int>(a_);
     const int v = active_[a];
     const Eigen::Vector3d u = substep_drift(v, h);  // before x changes: it reads x
     vel_.row(v) += vec3(B.dv, a).transpose();
@@ -1045,7 +1035,7 @@ int LatticeDynamics::implicit_substep(double h) {
     // A contact lands exactly on the floor (+ the crumple's lift), not a rounding below or
     // above it, so that the next substep's contact test finds it there.
     if (contact_(v) >= 0.0) x(v, 2) = p_.floor_z + h * std::max(drift_(v, 2), 0.0);
-  }
+  });
   return iterations;
 }
 
@@ -1124,10 +1114,8 @@ void LatticeDynamics::update_sleep(double dt) {
   // A vertex sleeps when it, and every spring neighbour, is slower than sleep_speed, it was not
   // forced this step, and its net force (floor reaction included) would not bring it to
   // sleep_speed within a step.
-#ifdef THINBURN_HAVE_OPENMP
-#pragma omp parallel for num_threads(thinburn::num_threads()) schedule(static) if (na > kParallelMin)
-#endif
-  for (int a = 0; a < na; ++a) {
+  parallel_for(0, na, kRowCost, [&](long a_) {
+    const int a = static_cast<int>(a_);
     const int v = active_[a];
     if (hold_[v] > 0) --hold_[v];
     bool quiet = hold_[v] == 0 && !forced_[v] && vel_.row(v).norm() < p_.sleep_speed;
@@ -1135,7 +1123,7 @@ void LatticeDynamics::update_sleep(double dt) {
       quiet = vel_.row(inc_other_[q]).norm() < p_.sleep_speed;
     if (quiet) quiet = supported(v, vertex_force(v, x, vel_)).norm() / mass_(v) * dt < p_.sleep_speed;
     mark_[v] = quiet ? 1 : 0;
-  }
+  });
   // Regions sleep, not stragglers: when the quiet vertices are under 1/kSleepShare of the awake
   // set, none sleeps this step. A few sleepers inside a moving sheet save little and cost a
   // redone step or a new factorization each time the motion stresses them awake.

@@ -123,6 +123,19 @@ class LatticeDynamics {
   /// max_substeps substeps.
   StepStats step(double dt, const Eigen::VectorXd& D, const Eigen::VectorXd& heat);
 
+  /// @brief What the set_* calls and a step change, besides the lattice's positions and what a
+  /// step that throws restores itself: taken before a step that may throw, put back if it does.
+  struct Checkpoint {
+    Eigen::VectorXd mass, strength;
+    std::vector<double> spring_scale;
+    std::vector<std::uint8_t> awake;
+    std::vector<std::uint16_t> hold, hold_len;
+    RowMatX3 vel, accel;
+    Eigen::Vector3d wind;
+  };
+  Checkpoint checkpoint() const;
+  void rollback(Checkpoint&& c);
+
   /// @brief Velocities ((2 M^2) x 3), m/s.
   const RowMatX3& velocities() const { return vel_; }
   /// @brief 1 where a vertex is awake (integrated by the next step), 0 where it sleeps or is

@@ -38,10 +38,7 @@ template <int P>
 void direct_sum(const double* x, const double* w, int n, const RowMatX3& targets, double d_min,
                 Eigen::VectorXd& out) {
   const Eigen::Index m = targets.rows();
-#ifdef THINBURN_HAVE_OPENMP
-#pragma omp parallel for num_threads(thinburn::num_threads()) schedule(static)
-#endif
-  for (Eigen::Index j = 0; j < m; ++j) {
+  parallel_for(0, m, 8L * n, [&](long j) {
     const double yx = targets(j, 0), yy = targets(j, 1), yz = targets(j, 2);
     double s = 0.0;
     for (int i = 0; i < n; ++i) {
@@ -49,7 +46,7 @@ void direct_sum(const double* x, const double* w, int n, const RowMatX3& targets
       s += w[i] * kernel<P>(std::sqrt(dx * dx + dy * dy + dz * dz), d_min);
     }
     out(j) = s;
-  }
+  });
 }
 
 void direct_sum(const double* x, const double* w, int n, const RowMatX3& targets, int p,
@@ -202,14 +199,13 @@ template <int P>
 void fast_sum(const Tree& tree, const RowMatX3& targets, double d0, double tol,
               Eigen::VectorXd& out, double* bound) {
   const Eigen::Index m = targets.rows();
-#ifdef THINBURN_HAVE_OPENMP
-#pragma omp parallel for num_threads(thinburn::num_threads()) schedule(dynamic, 16)
-#endif
-  for (Eigen::Index j = 0; j < m; ++j) {
+  // A target's tree walk visits some tens of nodes of a few flops each.
+  constexpr long kTargetCost = 256;
+  parallel_for(0, m, kTargetCost, [&](long j) {
     double b = 0.0;
     sum_target<P>(tree, targets.row(j).transpose(), d0, tol, out(j), b);
     if (bound) bound[j] = b;
-  }
+  });
 }
 
 void copy_points(const RowMatX3& m, std::vector<double>& out) {

@@ -1,6 +1,7 @@
 #include "lattice.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <stdexcept>
@@ -12,10 +13,11 @@ namespace thinburn {
 namespace {
 
 constexpr double kParamSlack = 1e-9;
-// Below this many points (about 0.1 ms of work) deform runs on one thread: waking the team
-// costs microseconds on a quiet machine, and milliseconds when another process holds a core
-// and a team member has to wait for the scheduler (measured: docs/bench.md).
-constexpr Eigen::Index kParallelPoints = 16384;
+// deform's work: points go in blocks of kDeformBlock (one call of the vectorised kernel each);
+// one point costs about 2 of kParallelWork's units (threads.hpp), so meshes below about 16k
+// vertices deform on one thread.
+constexpr Eigen::Index kDeformBlock = 1024;
+constexpr long kPointCost = 2;
 
 // Weights of one lattice axis at coordinate x over the three nodes base, base+1, base+2
 // (base + 2 may be unused: weight 0). Linear: two nodes.
@@ -96,9 +98,9 @@ inline void zero4(Lanes4& v) { v.setZero(); }
 // and raising z to z_min: the result does not depend on the thread count. Returns true when a
 // couple index is out of range (couple 0 stands in; the caller throws).
 template <int St>
-THINBURN_AVX2_CLONE bool deform_points(const Embedding& e, const double* table, int couples,
-                                       Eigen::Ref<RowMatX3>& out, double z_min) {
-  const Eigen::Index n = e.size();
+THINBURN_AVX2_CLONE bool deform_range(const Embedding& e, const double* table, int couples,
+                                      Eigen::Ref<RowMatX3>& out, double z_min, Eigen::Index lo,
+                                      Eigen::Index hi) {
   const std::int32_t* couple = e.couple.data();
   const double* weight = e.weight.data();
   const double* r_of = e.r.data();
@@ -107,11 +109,7 @@ THINBURN_AVX2_CLONE bool deform_points(const Embedding& e, const double* table, 
   const Eigen::Index stride = out.outerStride();
   const auto limit = static_cast<std::uint32_t>(couples);
   bool bad = false;
-#ifdef THINBURN_HAVE_OPENMP
-#pragma omp parallel for num_threads(thinburn::num_threads()) schedule(static) reduction(|| : bad) \
-    if (n >= kParallelPoints)
-#endif
-  for (Eigen::Index p = 0; p < n; ++p) {
+  for (Eigen::Index p = lo; p < hi; ++p) {
     const double r = r_of[p], s = 1.0 - r;
     Lanes4 acc, bottom, top;
     zero4(acc);
@@ -133,6 +131,20 @@ THINBURN_AVX2_CLONE bool deform_points(const Embedding& e, const double* table, 
     o[2] = std::max(rest[3 * p + 2] + acc[2], z_min);
   }
   return bad;
+}
+
+// Blocks of kDeformBlock points, each a call of the cloned (vectorised) kernel.
+template <int St>
+bool deform_points(const Embedding& e, const double* table, int couples, Eigen::Ref<RowMatX3>& out,
+                   double z_min) {
+  const Eigen::Index n = e.size();
+  const long blocks = static_cast<long>((n + kDeformBlock - 1) / kDeformBlock);
+  std::atomic<bool> bad{false};
+  parallel_for(0, blocks, kDeformBlock * kPointCost, [&](long b) {
+    const Eigen::Index lo = b * kDeformBlock, hi = std::min<Eigen::Index>(n, lo + kDeformBlock);
+    if (deform_range<St>(e, table, couples, out, z_min, lo, hi)) bad.store(true, std::memory_order_relaxed);
+  });
+  return bad.load();
 }
 
 }  // namespace

@@ -189,10 +189,8 @@ void ParticleSystem::step(double dt, const Eigen::Vector3d& wind) {
   const double lift = params_.buoyancy / params_.temperature0;
   const std::uint64_t seed = params_.seed;
   const int n = count_;
-#ifdef THINBURN_HAVE_OPENMP
-#pragma omp parallel for num_threads(thinburn::num_threads()) schedule(static) if (thinburn::worth_threads(64L * n))
-#endif
-  for (int i = 0; i < n; ++i) {
+  parallel_for(0, n, 64, [&](long i_) {
+    const int i = static_cast<int>(i_);
     const double g = lift * temp_(i);
     for (int a = 0; a < 3; ++a) {
       const double rel = vel_(i, a) - wind(a);
@@ -207,7 +205,7 @@ void ParticleSystem::step(double dt, const Eigen::Vector3d& wind) {
     }
     temp_(i) *= ec;
     age_(i) += dt;
-  }
+  });
   compact();
 }
 

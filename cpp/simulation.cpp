@@ -47,6 +47,54 @@ Simulation::Simulation(const RowMatX3& vertices, const RowMatX3i& faces, const R
   if (!pinned.empty() && pinned.size() != static_cast<std::size_t>(vertices.rows()))
     throw std::invalid_argument("pinned: one flag per vertex expected");
   if (params.shell) build_shell(pinned);
+  build_locator();
+}
+
+void Simulation::build_locator() {
+  // Buckets: the lattice's control cells (a cell moves with its quad's four couples), or
+  // blocks of kBlock x kBlock cells on a sheet that never moves.
+  constexpr int kBlock = 4 * CellLocator::kBlock;
+  const int N = sheet_.cells(), nc = sheet_.num_cells();
+  std::vector<int> bucket(nc);
+  int buckets;
+  if (lattice_) {
+    buckets = (M_ - 1) * (M_ - 1);
+    for (int c = 0; c < nc; ++c) {
+      int cp[4];
+      double w[4];
+      cell_couples(c, cp, w);
+      bucket[c] = (cp[0] / M_) * (M_ - 1) + cp[0] % M_;
+    }
+  } else {
+    const int nb = (N + kBlock - 1) / kBlock;
+    buckets = nb * nb;
+    for (int c = 0; c < nc; ++c) bucket[c] = (c / N / kBlock) * nb + (c % N) / kBlock;
+  }
+  locator_ = std::make_unique<CellLocator>(N, sheet_.cell_rest(), sheet_.inside(), bucket, buckets);
+  locator_stale_ = lattice_ != nullptr;
+}
+
+void Simulation::refresh_locator() const {
+  // A quad's cells move by convex combinations of its four couples' mid-layer displacements.
+  if (!locator_stale_) return;
+  const RowMatX3& x = lattice_->positions();
+  const RowMatX3& x0 = lattice_->rest();
+  const int q = M_ - 1;
+  RowMatX3 lo(q * q, 3), hi(q * q, 3);
+  for (int i = 0; i < q; ++i)
+    for (int j = 0; j < q; ++j) {
+      const int corner[4] = {i * M_ + j, i * M_ + j + 1, (i + 1) * M_ + j, (i + 1) * M_ + j + 1};
+      Eigen::RowVector3d l = Eigen::RowVector3d::Constant(std::numeric_limits<double>::infinity()), h = -l;
+      for (int c : corner) {
+        const Eigen::RowVector3d d = 0.5 * (x.row(2 * c) - x0.row(2 * c) + x.row(2 * c + 1) - x0.row(2 * c + 1));
+        l = l.cwiseMin(d);
+        h = h.cwiseMax(d);
+      }
+      lo.row(i * q + j) = l;
+      hi.row(i * q + j) = h;
+    }
+  locator_->set_displacement_bounds(lo, hi);
+  locator_stale_ = false;
 }
 
 double Simulation::hash_uniform(std::uint64_t stream, std::uint64_t key) const {
@@ -132,22 +180,8 @@ LocalSpeed Simulation::local_speed(int cell) const {
 }
 
 int Simulation::ignite(const Eigen::Vector3d& point, double t, double radius) {
-  const int nc = sheet_.num_cells(), N = sheet_.cells();
-  const auto& inside = sheet_.inside();
-  int best = -1;
-  double best_d2 = kInf;
-  std::vector<int> lit;
-  for (int c = 0; c < nc; ++c) {
-    if (!inside[c]) continue;
-    const double d2 = (cell_position(c) - point).squaredNorm();
-    if (d2 < best_d2) best_d2 = d2, best = c;
-    if (radius > 0 && d2 <= radius * radius) lit.push_back(c);
-  }
-  const double reach = std::max({radius, 3.0 * std::max(sheet_.du(), sheet_.dv()), 0.02 * std::sqrt(sheet_.area())});
-  if (best < 0 || best_d2 > reach * reach)
-    throw std::invalid_argument("point: no cell of the sheet lies within " + std::to_string(reach) +
-                                " m of the point (nearest is " + std::to_string(std::sqrt(best_d2)) + " m away)");
-  if (lit.empty()) lit.push_back(best);
+  const int N = sheet_.cells();
+  const std::vector<int> lit = cells_near(point, radius);
   // The front cannot rewrite cells it has already accepted, so an ignition time before the
   // last step is taken as that step's end: the fire starts now and catches up from there.
   const double t0 = std::max(t, front_.time());
@@ -155,8 +189,82 @@ int Simulation::ignite(const Eigen::Vector3d& point, double t, double radius) {
   return static_cast<int>(lit.size());
 }
 
+std::vector<int> Simulation::cells_near(const Eigen::Vector3d& point, double radius) const {
+  if (lattice_) refresh_locator();
+  CellLocator::Found found = locator_->find(point, radius, [this](int c) { return cell_position(c); });
+  const int best = found.nearest;
+  std::vector<int>& lit = found.within;
+  const double reach = std::max({radius, 3.0 * std::max(sheet_.du(), sheet_.dv()), 0.02 * std::sqrt(sheet_.area())});
+  if (best < 0 || found.distance > reach)
+    throw std::invalid_argument("point: no cell of the sheet lies within " + std::to_string(reach) +
+                                " m of the point (nearest is " + std::to_string(found.distance) + " m away)");
+  if (lit.empty()) lit.push_back(best);
+  return std::move(lit);
+}
+
+// Everything a step changes, for the steps that may refuse (Simulation::step_may_throw). The
+// dynamics restores its rest lengths and heat itself when it throws.
+struct Simulation::Saved {
+  double time;
+  FireFront front;
+  std::vector<std::uint8_t> state;
+  std::vector<int> burning;
+  std::vector<double> mass;
+  Eigen::VectorXd control_mass, burnt_area, strength, applied_rotation;
+  bool mass_dirty, strength_dirty;
+  StepStats stats;
+  std::unique_ptr<ParticleSystem> particles;
+  std::unique_ptr<Bending> bending;
+  RowMatX3 lattice;
+  LatticeDynamics::Checkpoint dynamics;
+};
+
+bool Simulation::step_may_throw() const {
+  // Only an explicit integrator refuses a step (more than max_substeps needed); the implicit one
+  // takes any step, so its frames never pay for a copy.
+  return lattice_ && params_.dynamics.integrator != Integrator::Implicit;
+}
+
+Simulation::Saved Simulation::save() const {
+  return Saved{time_, front_, state_, burning_, mass_, control_mass_, burnt_area_, strength_,
+               applied_rotation_, mass_dirty_, strength_dirty_, stats_,
+               std::make_unique<ParticleSystem>(*particles_), std::make_unique<Bending>(*bending_),
+               lattice_->positions(), dynamics_->checkpoint()};
+}
+
+void Simulation::restore(Saved&& s) {
+  time_ = s.time;
+  front_ = std::move(s.front);
+  state_ = std::move(s.state);
+  burning_ = std::move(s.burning);
+  mass_ = std::move(s.mass);
+  control_mass_ = std::move(s.control_mass);
+  burnt_area_ = std::move(s.burnt_area);
+  strength_ = std::move(s.strength);
+  applied_rotation_ = std::move(s.applied_rotation);
+  stats_ = s.stats;
+  particles_ = std::move(s.particles);
+  bending_ = std::move(s.bending);
+  lattice_->positions() = s.lattice;
+  dynamics_->rollback(std::move(s.dynamics));
+  mass_dirty_ = s.mass_dirty;
+  strength_dirty_ = s.strength_dirty;
+  locator_stale_ = true;
+}
+
 void Simulation::step(double dt) {
   if (!(dt > 0) || !std::isfinite(dt)) throw std::invalid_argument("dt must be > 0 and finite");
+  if (!step_may_throw()) return step_unguarded(dt);
+  Saved saved = save();
+  try {
+    step_unguarded(dt);
+  } catch (...) {
+    restore(std::move(saved));
+    throw;
+  }
+}
+
+void Simulation::step_unguarded(double dt) {
   const double t_end = time_ + dt;
   for (int c : front_.advance(t_end, speed_fn_)) {
     if (state_[c] != kUnburnt) continue;
@@ -166,6 +274,7 @@ void Simulation::step(double dt) {
   time_ = t_end;
   retire_burnt();
   if (lattice_) step_shell(dt);
+  locator_stale_ = lattice_ != nullptr;
 }
 
 void Simulation::retire_burnt() {

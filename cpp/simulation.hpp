@@ -2,6 +2,7 @@
 /// @brief The whole model, stepped in time: cells and fire front (paper §3), fire particles,
 /// heat and pyrolysis (§4.2), the FFD lattice and its motion (§4.1, §4.3).
 #include "bending.hpp"
+#include "cell_locator.hpp"
 #include "dynamics.hpp"
 #include "fire_front.hpp"
 #include "lattice.hpp"
@@ -60,7 +61,10 @@ class Simulation {
   /// at time t. Throws std::invalid_argument when no cell lies within reach of the point.
   /// @return the number of cells lit.
   int ignite(const Eigen::Vector3d& point, double t, double radius);
-  /// @brief Advance by dt seconds (dt > 0).
+  /// @brief The cells ignite(point, t, radius) would light, ascending; throws as ignite does.
+  std::vector<int> cells_near(const Eigen::Vector3d& point, double radius) const;
+  /// @brief Advance by dt seconds (dt > 0). Atomic: a step that throws (an explicit integrator
+  /// that would need more than max_substeps) leaves the Simulation exactly as it was.
   void step(double dt);
 
   double time() const { return time_; }
@@ -110,6 +114,13 @@ class Simulation {
  private:
   Eigen::Vector3d cell_position(int cell) const;
   Eigen::Vector3d cell_normal(int cell) const;
+  struct Saved;
+  bool step_may_throw() const;
+  void step_unguarded(double dt);
+  Saved save() const;
+  void restore(Saved&& saved);
+  void build_locator();
+  void refresh_locator() const;
   void retire_burnt();
   void build_shell(const std::vector<std::uint8_t>& pinned);
   RowMatX3 drape_lattice() const;
@@ -148,6 +159,9 @@ class Simulation {
   bool mass_dirty_ = false;
   bool strength_dirty_ = false;
   StepStats stats_;
+  // Nearest-cell queries for ignite; its displacement bounds follow the lattice lazily.
+  std::unique_ptr<CellLocator> locator_;
+  mutable bool locator_stale_ = true;
   RowMatX3 emit_pos_, emit_normal_, ignition_pts_, particle_pos_;
   Eigen::VectorXd emit_len_, particle_temp_, rotation_, applied_rotation_;
 };

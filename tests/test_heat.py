@@ -248,7 +248,6 @@ def test_summer_reuse_matches_free_function():
                                           kernel_sum(src, w, tgt, power=power, method="direct"))
 
 
-@pytest.mark.skipif(not thinburn.has_openmp(), reason="needs OpenMP")
 def test_bit_identical_for_any_thread_count():
     x, t = fire_front("ring", n_steps=10)
     tgt = np.r_[lattice(24, 0.002), lattice(24, -0.002)]

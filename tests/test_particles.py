@@ -231,7 +231,6 @@ def test_same_seed_is_bit_identical_and_other_seeds_differ():
     assert a[0].shape != c[0].shape or not np.array_equal(a[0], c[0])
 
 
-@pytest.mark.skipif(not thinburn.has_openmp(), reason="needs OpenMP")
 def test_bit_identical_for_any_thread_count():
     old = _core.num_threads()
     try:

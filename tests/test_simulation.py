@@ -255,3 +255,42 @@ def test_bad_step_and_ignite(square):
     sim.ignite((0.1, 0.1, 0.0))
     sim.step(1.0)
     assert sim.time == 1.0
+
+
+def _brute_cells_near(sim, point, radius):
+    """What ignite lit before the locator: a scan of every inside cell."""
+    pos = sim.cell_positions().reshape(-1, 3)
+    inside = sim.inside().ravel().astype(bool)
+    d2 = np.sum((pos - np.asarray(point)) ** 2, axis=1)
+    d2[~inside] = np.inf
+    if radius > 0 and np.any(d2 <= radius * radius):
+        idx = np.flatnonzero(d2 <= radius * radius)
+    else:
+        idx = np.array([int(np.argmin(d2))])
+    return np.stack([idx // sim.cells, idx % sim.cells], axis=1)
+
+
+@pytest.mark.parametrize("shell", [True, False])
+def test_cells_near_finds_what_a_scan_of_every_cell_finds(shell):
+    # ignite looks cells up through the lattice's control cells (cpp/cell_locator.hpp) instead
+    # of scanning all N² cells; on a crumpled, moving sheet it must find the same cells.
+    v, f = rect_sheet(0.21, 0.297, nx=15, ny=21)
+    sim = thinburn.Simulation(v, f, cells=48, floor=0.0, shell=shell, seed=2)
+    sim.ignite((0.0, 0.0, 0.0), time=0.0, radius=0.03)
+    sim.ignite((0.21, 0.297, 0.0), time=0.0)
+    for _ in range(24 * 25):
+        sim.step(1 / 24)
+    pos = sim.cell_positions().reshape(-1, 3)[sim.inside().ravel().astype(bool)]
+    if shell:
+        assert np.ptp(pos[:, 2]) > 0.01  # the sheet has curled up: positions are not the rest plane
+    rng = np.random.default_rng(0)
+    for k in range(60):
+        point = pos[rng.integers(len(pos))] + rng.normal(0.0, 0.004, 3)
+        radius = [0.0, 0.004, 0.02][k % 3]
+        np.testing.assert_array_equal(sim.cells_near(point, radius), _brute_cells_near(sim, point, radius))
+
+
+def test_cells_near_refuses_a_point_off_the_sheet(square):
+    sim = thinburn.Simulation(*square, cells=16, shell=False)
+    with pytest.raises(ValueError, match="point"):
+        sim.cells_near((5.0, 5.0, 5.0))

@@ -9,6 +9,7 @@
 
 #include "bindings.hpp"
 #include "simulation.hpp"
+#include "threads.hpp"
 
 namespace py = pybind11;
 
@@ -119,7 +120,17 @@ void define_simulation(py::module_& m) {
            py::arg("vertices"), py::arg("faces"), py::arg("uv"), py::arg("params"), py::arg("pinned"))
       .def("ignite", &S::ignite, py::arg("point"), py::arg("time"), py::arg("radius"),
            py::call_guard<py::gil_scoped_release>())
-      .def("step", &S::step, py::arg("dt"), py::call_guard<py::gil_scoped_release>())
+      .def("cells_near", &S::cells_near, py::arg("point"), py::arg("radius"),
+           py::call_guard<py::gil_scoped_release>())
+      .def("step",
+           [](S& s, double dt, int threads) {
+             // The Simulation's own count, for this call only: Simulations on other threads
+             // keep theirs.
+             py::gil_scoped_release release;
+             ScopedThreads scope(threads);
+             s.step(dt);
+           },
+           py::arg("dt"), py::arg("threads"))
       .def_property_readonly("time", &S::time)
       .def_property("wind", &S::wind, &S::set_wind)
       .def_property_readonly("cells", [](const S& s) { return s.sheet().cells(); })

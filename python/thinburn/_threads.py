@@ -1,37 +1,54 @@
-"""The core's thread count: explicit, settable, never read from the environment."""
+"""The core's thread count: explicit, settable, never read from the environment.
+
+The core runs its parallel loops on a small pool of its own (docs/threads.md): the calling
+thread claims chunks of each loop alongside the pool's helpers and never waits for a helper
+that has not started, so on a busy machine extra threads cost almost nothing. A Simulation
+keeps its own count (``threads=``); ``set_threads`` sets the default for the one-shot
+functions (``arrival_times``, the heat sums, the FFD of ``thinburn.lattice``).
+"""
 from __future__ import annotations
 
-import warnings
+import numbers
 
 from . import _core
 
 
-def has_openmp() -> bool:
-    """Whether the C++ core was built with OpenMP."""
-    return bool(_core.has_openmp())
+def hardware_threads() -> int:
+    """Logical cores of this machine."""
+    return int(_core.hardware_threads())
+
+
+def max_threads() -> int:
+    """The largest thread count accepted: 4 x the logical cores, at least 8."""
+    return int(_core.max_threads())
+
+
+def resolve_threads(n, name: str = "threads") -> int:
+    """A thread count from None (all logical cores) or an integer in [1, max_threads()]."""
+    if n is None:
+        return hardware_threads()
+    if isinstance(n, bool) or not isinstance(n, numbers.Integral):
+        raise TypeError(f"{name} must be an int or None, got {type(n).__name__}")
+    n = int(n)
+    top = max_threads()
+    if not 1 <= n <= top:
+        raise ValueError(f"{name} must be in [1, {top}] (4 x the {hardware_threads()} logical cores, "
+                         f"at least 8) or None for all cores, got {n}")
+    return n
 
 
 def set_threads(n: int | None) -> int:
-    """Set the number of threads the core uses; None means all logical cores.
+    """Set the default number of threads the core uses; None means all logical cores.
 
     Returns the count now in force. Results are identical for every count.
     """
-    if n is None:
-        n = _core.max_hardware_threads()
-    if isinstance(n, bool) or not isinstance(n, int):
-        raise TypeError(f"threads must be an int or None, got {type(n).__name__}")
-    if n < 1:
-        raise ValueError(f"threads must be >= 1, got {n}")
-    if n > 1 and not _core.has_openmp():
-        warnings.warn("thinburn was built without OpenMP; running on 1 thread", RuntimeWarning,
-                      stacklevel=2)
-        n = 1
+    n = resolve_threads(n)
     _core.set_num_threads(n)
     return n
 
 
 def get_threads() -> int:
-    """The number of threads the core uses now."""
+    """The default number of threads the core uses now."""
     return int(_core.num_threads())
 
 

@@ -22,10 +22,13 @@ Parts (in this order; all by default):
   active       a 1 m sheet with a 1 cm fire at N = 256, 512, 1024 (--quick: 256, 512): cost per
                unit of active work against N (fire only; shell with M = 17; shell with the
                default lattice, full runs only).
+  threads      every preset's demo scene (128², ~16k vertices) and a large sheet (512², ~100k)
+               on 1 thread and on all cores, on the machine as it is and with every core
+               loaded by processes the bench starts itself: the all-cores / 1-thread ratio.
 
 Writes DIR/results.json (rows {part, method, resolution or dt, error or seconds, ...}; "fit"
 rows hold slopes and ratios), DIR/meta.json, DIR/speed_accuracy.png, DIR/stability.png,
-DIR/performance.png and DIR/scaling.png. One progress line per measurement on stderr.
+DIR/performance.png, DIR/scaling.png and DIR/threads.png. One progress line per measurement on stderr.
 Seconds of kernels are the best of --repeat runs (default 3; ffd at least 10). Frames: each
 frame's fastest time over --repeat runs of the same deterministic simulation (--quick and the
 default-lattice active runs: 1 run). Everything runs on --threads threads (default: all
@@ -44,8 +47,9 @@ import time
 import numpy as np
 
 from . import _bench_perf as perf
+from . import _bench_threads
 from . import _core
-from ._threads import set_threads
+from ._threads import hardware_threads, set_threads
 from .fire_front import FRONT_METHODS, method_enum
 
 # ---------------------------------------------------------------- fire front
@@ -365,12 +369,13 @@ def _writable_dir(ap, out):
         ap.error(f"--out {out!r} is not a writable directory: {exc}")
 
 
-PARTS = ("fire_front", "integrators", "heat") + perf.PERF_PARTS
+PARTS = ("fire_front", "integrators", "heat") + perf.PERF_PARTS + ("threads",)
 FIGURES = (  # file, plotting function, the row parts it draws
     ("speed_accuracy.png", plot_speed_accuracy, ("fire_front", "integrators", "heat")),
     ("stability.png", plot_stability, ("stability",)),
     ("performance.png", perf.plot_performance, ("ffd", "frames")),
     ("scaling.png", perf.plot_scaling, ("scaling", "active")),
+    ("threads.png", _bench_threads.plot_threads, ("threads",)),
 )
 
 
@@ -396,6 +401,9 @@ def run_perf_parts(parts, quick, repeat, threads, log):
         rows += perf.bench_active(sizes, ["fire", "shell_lattice17"], 24, 24, frame_repeat, threads, log)
         if not quick:  # the default lattice grows with N: seconds per frame at 1024
             rows += perf.bench_active(sizes, ["shell_auto_lattice"], 6, 24, 1, threads, log)
+    if "threads" in parts:
+        rows += _bench_threads.bench_threads(24 if quick else 48, 48, frame_repeat, log,
+                                             _bench_threads.SCENES[:1] if quick else _bench_threads.SCENES)
     set_threads(threads)
     return rows
 
@@ -440,7 +448,7 @@ def main(argv=None) -> int:
     meta = dict(quick=args.quick, repeat=repeat, threads=threads, parts=args.parts,
                 machine=platform.machine(), processor=platform.processor(),
                 python=platform.python_version(), cpu_count=os.cpu_count(),
-                has_openmp=bool(_core.has_openmp()), load_average_start=load_start,
+                hardware_threads=hardware_threads(), load_average_start=load_start,
                 load_average_end=_load_average(), wall_seconds=time.perf_counter() - t_start)
     with open(os.path.join(out, "results.json"), "w") as f:
         json.dump(rows, f, indent=1)

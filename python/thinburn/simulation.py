@@ -1,11 +1,13 @@
 """The Simulation: a burning sheet stepped in time (numpy arrays in and out)."""
 from __future__ import annotations
 
+import threading
+
 import numpy as np
 
 from . import _core
 from . import _validate as V
-from ._threads import set_threads
+from ._threads import resolve_threads
 from .materials import Material, resolve_material
 
 FRONT_METHODS = ("cellular", "cellular16", "fmm1", "fmm")
@@ -100,7 +102,7 @@ class Simulation:
             raise ValueError("faces: an empty mesh (no triangles)")
         uvs = np.zeros((0, 2)) if uv is None else V.real_array(uv, "uv", (len(verts), 2))
         self.material: Material = resolve_material(material)
-        self._threads = set_threads(threads)
+        self._threads = resolve_threads(threads)
         p = self._params(self.material, V.integer(cells, "cells", low=2, high=4096),
                          V.integer(seed, "seed", low=0, high=2**63 - 1),
                          V.choice(front, "front", FRONT_METHODS), params)
@@ -116,7 +118,7 @@ class Simulation:
                                  f"{verts[:, 2].min():.6g} < floor {p.floor_z:.6g})")
         _set_group(p.set_dynamics, None, {"integrator": V.choice(integrator, "integrator", INTEGRATORS)})
         pins = _pinned_mask(pinned, len(verts))
-        self._sim = _core.Simulation(verts, tris, uvs, p, pins)
+        self._sim = _Serialised(_core.Simulation(verts, tris, uvs, p, pins))
         self.params = p
         self.n_vertices = len(verts)
 
@@ -183,11 +185,19 @@ class Simulation:
         r = V.real(radius, "radius", low=0.0)
         return self._sim.ignite(p, t, r)
 
+    def cells_near(self, point, radius=0.0) -> np.ndarray:
+        """(k, 2) [row, col] of the cells ``ignite(point, radius=radius)`` would light: the
+        nearest inside cell, or every inside cell within radius. Costs about the lattice's
+        size, not the number of cells. Raises ValueError as ignite does."""
+        p = V.vector3(point, "point")
+        r = V.real(radius, "radius", low=0.0)
+        cells = np.asarray(self._sim.cells_near(p, r), dtype=np.int64)
+        return np.stack([cells // self.cells, cells % self.cells], axis=1)
+
     def step(self, dt) -> None:
         """Advance by dt seconds (> 0); frame-sized steps are fine."""
         d = V.real(dt, "dt", low=0.0, low_open=True)
-        set_threads(self._threads)
-        self._sim.step(d)
+        self._sim.step(d, self._threads)
 
     def run(self, duration, dt=1 / 24, callback=None) -> None:
         """Step until `duration` more seconds have passed; callback(sim) after each step."""
@@ -215,11 +225,13 @@ class Simulation:
 
     @property
     def threads(self) -> int:
+        """This Simulation's thread count (None sets all logical cores); results never depend
+        on it, and other Simulations keep their own."""
         return self._threads
 
     @threads.setter
     def threads(self, value) -> None:
-        self._threads = set_threads(value)
+        self._threads = resolve_threads(value)
 
     # --- the shell ----------------------------------------------------------------------
     @property
@@ -379,6 +391,36 @@ class Simulation:
             out.update(self._sim.step_stats())
             out["particles"] = int(len(self._sim.particles()[1]))
         return out
+
+
+class _Serialised:
+    """One core Simulation behind a lock: calls from several Python threads run one at a time.
+
+    The core releases the GIL while it steps, so without the lock a second thread could read
+    or step a Simulation halfway through a step (which crashed). Waiting for the lock releases
+    the GIL too. Many Simulations still run in parallel, one per thread.
+    """
+
+    __slots__ = ("_core", "_lock")
+
+    def __init__(self, core):
+        object.__setattr__(self, "_core", core)
+        object.__setattr__(self, "_lock", threading.Lock())
+
+    def __getattr__(self, name):
+        with self._lock:
+            attr = getattr(self._core, name)
+        if not callable(attr):
+            return attr
+
+        def locked(*args, **kwargs):
+            with self._lock:
+                return attr(*args, **kwargs)
+        return locked
+
+    def __setattr__(self, name, value):
+        with self._lock:
+            setattr(self._core, name, value)
 
 
 def _set_group(setter, prefix, values: dict) -> None:
