@@ -311,6 +311,37 @@ def bench_active(sizes, modes, frames, warmup, repeat, threads, log):
     return rows
 
 
+IGNITES_PER_FRAME = 64  # the add-on's moving igniter: one ignite per sub-frame sample
+
+
+def bench_ignite(sizes, repeat, log):
+    """Seconds per ignite (a moving igniter's IGNITES_PER_FRAME points along a line) on the A4
+    demo sheet after 2 s of burning and curling, against N; a fit row holds the ratio of the
+    largest N's cost to the smallest's beside the N² ratio (a scan of every cell: equal)."""
+    scene = default_scene("paper")
+    rows = []
+    for N in sizes:
+        sim = build(scene, "paper", cells=N, threads=1)
+        for _ in range(48):
+            sim.step(FRAME_DT)
+        points = [(0.05 + 0.1 * k / IGNITES_PER_FRAME, 0.1, 0.0) for k in range(IGNITES_PER_FRAME)]
+
+        def frame():
+            for p in points:
+                sim.ignite(p)
+        secs = best_seconds(frame, repeat, budget=0.1) / IGNITES_PER_FRAME
+        rows.append(dict(part="ignite", method="ignite", resolution=N, cells=N * N,
+                         lattice=sim.lattice_size, seconds=secs, per_frame_ms=1e3 * secs * IGNITES_PER_FRAME))
+        log(f"ignite      N={N:5d} M={sim.lattice_size:3d} {1e6 * secs:8.1f} µs per ignite "
+            f"({IGNITES_PER_FRAME} a frame: {rows[-1]['per_frame_ms']:.2f} ms)")
+    if len(rows) >= 2:
+        a, b = rows[0], rows[-1]
+        rows.append(dict(part="fit", method="ignite", cells_ratio=b["cells"] / a["cells"],
+                         seconds_ratio=b["seconds"] / a["seconds"]))
+        log(f"ignite      fit: N² x{rows[-1]['cells_ratio']:.0f}, seconds per ignite x{rows[-1]['seconds_ratio']:.2f}")
+    return rows
+
+
 # ---------------------------------------------------------------- figures
 
 

@@ -21,7 +21,8 @@ Parts (in this order; all by default):
                scene, and against mesh vertices (1e3 .. 1e6, --quick .. 1e5) at 128² cells.
   active       a 1 m sheet with a 1 cm fire at N = 256, 512, 1024 (--quick: 256, 512): cost per
                unit of active work against N (fire only; shell with M = 17; shell with the
-               default lattice, full runs only).
+               default lattice, full runs only); and the cost of an ignite against N (a
+               moving igniter lights 64 points a frame in the add-on).
   threads      every preset's demo scene (128², ~16k vertices) and a large sheet (512², ~100k)
                on 1 thread and on all cores, on the machine as it is and with every core
                loaded by processes the bench starts itself: the all-cores / 1-thread ratio.
@@ -401,6 +402,7 @@ def run_perf_parts(parts, quick, repeat, threads, log):
         rows += perf.bench_active(sizes, ["fire", "shell_lattice17"], 24, 24, frame_repeat, threads, log)
         if not quick:  # the default lattice grows with N: seconds per frame at 1024
             rows += perf.bench_active(sizes, ["shell_auto_lattice"], 6, 24, 1, threads, log)
+        rows += perf.bench_ignite([128] + sizes, repeat, log)
     if "threads" in parts:
         rows += _bench_threads.bench_threads(24 if quick else 48, 48, frame_repeat, log,
                                              _bench_threads.SCENES[:1] if quick else _bench_threads.SCENES)
