@@ -290,3 +290,16 @@ def test_a_step_that_raises_leaves_the_simulation_as_it_was(integrator):
         sim.step(1 / 240)
         twin.step(1 / 240)
     assert _everything(sim) == _everything(twin)
+
+
+def test_params_are_a_read_only_view_of_the_live_values(a4):
+    sim = thinburn.Simulation(*a4, cells=16, floor=0.0, wind_drag=1.0)
+    assert sim.params.dynamics["wind_drag"] == 1.0 and sim.params.cells == 16
+    sim.set_dynamics(wind_drag=2.0, integrator="symplectic")
+    assert sim.params.dynamics["wind_drag"] == 2.0  # it stayed at 1.0 before issue #10/#11
+    assert sim.params.dynamics["integrator"] == "symplectic"
+    with pytest.raises(AttributeError, match="read-only"):
+        sim.params.cells = 32
+    with pytest.raises(AttributeError, match="set_dynamics"):
+        sim.params.set_dynamics({"wind_drag": 3.0})
+    assert "set_dynamics" not in dir(sim.params) and "cells" in dir(sim.params)

@@ -132,6 +132,8 @@ void define_simulation(py::module_& m) {
            },
            py::arg("dt"), py::arg("threads"))
       .def_property_readonly("time", &S::time)
+      .def_property_readonly("params", [](const S& s) { return s.params(); },
+                             "A copy of the parameters in force now.")
       .def_property("wind", &S::wind, &S::set_wind)
       .def_property_readonly("cells", [](const S& s) { return s.sheet().cells(); })
       .def_property_readonly("cell_size", [](const S& s) { return py::make_tuple(s.sheet().dv(), s.sheet().du()); })

@@ -119,7 +119,6 @@ class Simulation:
         _set_group(p.set_dynamics, None, {"integrator": V.choice(integrator, "integrator", INTEGRATORS)})
         pins = _pinned_mask(pinned, len(verts))
         self._sim = _Serialised(_core.Simulation(verts, tris, uvs, p, pins))
-        self.params = p
         self.n_vertices = len(verts)
 
     @staticmethod
@@ -208,6 +207,12 @@ class Simulation:
             self.step(d)
             if callback is not None:
                 callback(self)
+
+    @property
+    def params(self) -> "ParamsView":
+        """The model's parameters in force now (after any ``set_dynamics``), read-only:
+        ``sim.params.cells``, ``sim.params.dynamics["wind_drag"]``."""
+        return ParamsView(self._sim.params)
 
     @property
     def time(self) -> float:
@@ -391,6 +396,32 @@ class Simulation:
             out.update(self._sim.step_stats())
             out["particles"] = int(len(self._sim.particles()[1]))
         return out
+
+
+class ParamsView:
+    """A read-only view of a Simulation's parameters (a snapshot taken when it was read)."""
+
+    __slots__ = ("_p",)
+
+    def __init__(self, core_params):
+        object.__setattr__(self, "_p", core_params)
+
+    def __getattr__(self, name):
+        value = getattr(self._p, name)
+        if callable(value):  # the core struct's setters: not part of a read-only view
+            raise AttributeError(f"Simulation.params has no {name!r}; change the motion's parameters "
+                                 "with sim.set_dynamics(...)")
+        return value
+
+    def __setattr__(self, name, value):
+        raise AttributeError(f"Simulation.params is read-only ({name!r}): pass model parameters to "
+                             "Simulation(...), or change the motion's with sim.set_dynamics(...)")
+
+    def __dir__(self):
+        return [n for n in dir(self._p) if not n.startswith("_") and not callable(getattr(self._p, n))]
+
+    def __repr__(self):
+        return f"ParamsView(cells={self._p.cells}, front={self._p.front!r}, dynamics={self._p.dynamics})"
 
 
 class _Serialised:
