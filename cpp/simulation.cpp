@@ -11,6 +11,8 @@ namespace thinburn {
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
+const StepStats kNoStats{};
+const Eigen::VectorXd kNoMasses;
 
 // A stateless hash (splitmix64) so a cell's random draw depends only on the seed and the
 // cell, never on the order in which cells are visited.
@@ -46,8 +48,22 @@ Simulation::Simulation(const RowMatX3& vertices, const RowMatX3i& faces, const R
   speed_fn_ = [this](int cell) { return local_speed(cell); };
   if (!pinned.empty() && pinned.size() != static_cast<std::size_t>(vertices.rows()))
     throw std::invalid_argument("pinned: one flag per vertex expected");
-  if (params.shell) build_shell(pinned);
+  if (params.shell) shell_ = std::make_unique<Shell>(sheet_, shell_params(), mass_, pinned);
   build_locator();
+}
+
+ShellParams Simulation::shell_params() const {
+  ShellParams sp;
+  sp.lattice = params_.lattice;
+  sp.lattice_thickness = params_.lattice_thickness;
+  sp.has_floor = params_.has_floor;
+  sp.floor_z = params_.floor_z;
+  sp.ash_strength = params_.ash_strength;
+  sp.seed = params_.seed;
+  sp.dynamics = params_.dynamics;
+  sp.particles = params_.particles;
+  sp.bending = params_.bending;
+  return sp;
 }
 
 void Simulation::build_locator() {
@@ -57,13 +73,14 @@ void Simulation::build_locator() {
   const int N = sheet_.cells(), nc = sheet_.num_cells();
   std::vector<int> bucket(nc);
   int buckets;
-  if (lattice_) {
-    buckets = (M_ - 1) * (M_ - 1);
+  if (shell_) {
+    const int M = shell_->size();
+    buckets = (M - 1) * (M - 1);
     for (int c = 0; c < nc; ++c) {
       int cp[4];
       double w[4];
-      cell_couples(c, cp, w);
-      bucket[c] = (cp[0] / M_) * (M_ - 1) + cp[0] % M_;
+      shell_->cell_couples(c, cp, w);
+      bucket[c] = (cp[0] / M) * (M - 1) + cp[0] % M;
     }
   } else {
     const int nb = (N + kBlock - 1) / kBlock;
@@ -71,28 +88,13 @@ void Simulation::build_locator() {
     for (int c = 0; c < nc; ++c) bucket[c] = (c / N / kBlock) * nb + (c % N) / kBlock;
   }
   locator_ = std::make_unique<CellLocator>(N, sheet_.cell_rest(), sheet_.inside(), bucket, buckets);
-  locator_stale_ = lattice_ != nullptr;
+  locator_stale_ = shell_ != nullptr;
 }
 
 void Simulation::refresh_locator() const {
-  // A quad's cells move by convex combinations of its four couples' mid-layer displacements.
   if (!locator_stale_) return;
-  const RowMatX3& x = lattice_->positions();
-  const RowMatX3& x0 = lattice_->rest();
-  const int q = M_ - 1;
-  RowMatX3 lo(q * q, 3), hi(q * q, 3);
-  for (int i = 0; i < q; ++i)
-    for (int j = 0; j < q; ++j) {
-      const int corner[4] = {i * M_ + j, i * M_ + j + 1, (i + 1) * M_ + j, (i + 1) * M_ + j + 1};
-      Eigen::RowVector3d l = Eigen::RowVector3d::Constant(std::numeric_limits<double>::infinity()), h = -l;
-      for (int c : corner) {
-        const Eigen::RowVector3d d = 0.5 * (x.row(2 * c) - x0.row(2 * c) + x.row(2 * c + 1) - x0.row(2 * c + 1));
-        l = l.cwiseMin(d);
-        h = h.cwiseMax(d);
-      }
-      lo.row(i * q + j) = l;
-      hi.row(i * q + j) = h;
-    }
+  RowMatX3 lo, hi;
+  shell_->quad_displacement_bounds(lo, hi);
   locator_->set_displacement_bounds(lo, hi);
   locator_stale_ = false;
 }
@@ -116,23 +118,11 @@ double Simulation::noise(int cell, std::uint64_t stream) const {
 }
 
 Eigen::Vector3d Simulation::cell_position(int cell) const {
-  // Rest position plus the lattice's displacement at the cell centre, mid-thickness: the same
-  // trilinear FFD as the mesh's vertices, evaluated for one point on demand, so only the cells
-  // the front and the emitters touch are ever deformed.
-  Eigen::Vector3d p = sheet_.cell_rest().row(cell).transpose();
-  if (!lattice_) return p;
-  int cp[4];
-  double w[4];
-  cell_couples(cell, cp, w);
-  const RowMatX3& x = lattice_->positions();
-  const RowMatX3& x0 = lattice_->rest();
-  for (int k = 0; k < 4; ++k)
-    p += (0.5 * w[k]) * (x.row(2 * cp[k]) - x0.row(2 * cp[k]) + x.row(2 * cp[k] + 1) - x0.row(2 * cp[k] + 1)).transpose();
-  return p;
+  return shell_ ? shell_->cell_position(cell) : Eigen::Vector3d(sheet_.cell_rest().row(cell).transpose());
 }
 
 Eigen::Vector3d Simulation::cell_normal(int cell) const {
-  if (!lattice_) return sheet_.cell_rest_normal().row(cell).transpose();
+  if (!shell_) return sheet_.cell_rest_normal().row(cell).transpose();
   const int N = sheet_.cells(), r = cell / N, c = cell % N;
   const int cl = std::max(c - 1, 0), cr = std::min(c + 1, N - 1), rd = std::max(r - 1, 0), ru = std::min(r + 1, N - 1);
   const Eigen::Vector3d n = (cell_position(r * N + cr) - cell_position(r * N + cl))
@@ -190,7 +180,7 @@ int Simulation::ignite(const Eigen::Vector3d& point, double t, double radius) {
 }
 
 std::vector<int> Simulation::cells_near(const Eigen::Vector3d& point, double radius) const {
-  if (lattice_) refresh_locator();
+  if (shell_) refresh_locator();
   CellLocator::Found found = locator_->find(point, radius, [this](int c) { return cell_position(c); });
   const int best = found.nearest;
   std::vector<int>& lit = found.within;
@@ -204,32 +194,24 @@ std::vector<int> Simulation::cells_near(const Eigen::Vector3d& point, double rad
 
 // Everything a step changes, for the steps that may refuse (Simulation::step_may_throw). The
 // dynamics restores its rest lengths and heat itself when it throws.
+// Everything a step changes, for the steps that may refuse (Simulation::step_may_throw).
 struct Simulation::Saved {
   double time;
   FireFront front;
   std::vector<std::uint8_t> state;
   std::vector<int> burning;
   std::vector<double> mass;
-  Eigen::VectorXd control_mass, burnt_area, strength, applied_rotation;
-  bool mass_dirty, strength_dirty;
-  StepStats stats;
-  std::unique_ptr<ParticleSystem> particles;
-  std::unique_ptr<Bending> bending;
-  RowMatX3 lattice;
-  LatticeDynamics::Checkpoint dynamics;
+  Shell::Checkpoint shell;
 };
 
 bool Simulation::step_may_throw() const {
   // Only an explicit integrator refuses a step (more than max_substeps needed); the implicit one
   // takes any step, so its frames never pay for a copy.
-  return lattice_ && params_.dynamics.integrator != Integrator::Implicit;
+  return shell_ && params_.dynamics.integrator != Integrator::Implicit;
 }
 
 Simulation::Saved Simulation::save() const {
-  return Saved{time_, front_, state_, burning_, mass_, control_mass_, burnt_area_, strength_,
-               applied_rotation_, mass_dirty_, strength_dirty_, stats_,
-               std::make_unique<ParticleSystem>(*particles_), std::make_unique<Bending>(*bending_),
-               lattice_->positions(), dynamics_->checkpoint()};
+  return Saved{time_, front_, state_, burning_, mass_, shell_->checkpoint()};
 }
 
 void Simulation::restore(Saved&& s) {
@@ -238,17 +220,7 @@ void Simulation::restore(Saved&& s) {
   state_ = std::move(s.state);
   burning_ = std::move(s.burning);
   mass_ = std::move(s.mass);
-  control_mass_ = std::move(s.control_mass);
-  burnt_area_ = std::move(s.burnt_area);
-  strength_ = std::move(s.strength);
-  applied_rotation_ = std::move(s.applied_rotation);
-  stats_ = s.stats;
-  particles_ = std::move(s.particles);
-  bending_ = std::move(s.bending);
-  lattice_->positions() = s.lattice;
-  dynamics_->rollback(std::move(s.dynamics));
-  mass_dirty_ = s.mass_dirty;
-  strength_dirty_ = s.strength_dirty;
+  shell_->rollback(std::move(s.shell));
   locator_stale_ = true;
 }
 
@@ -273,8 +245,8 @@ void Simulation::step_unguarded(double dt) {
   }
   time_ = t_end;
   retire_burnt();
-  if (lattice_) step_shell(dt);
-  locator_stale_ = lattice_ != nullptr;
+  if (shell_) step_shell(dt);
+  locator_stale_ = shell_ != nullptr;
 }
 
 void Simulation::retire_burnt() {
@@ -284,11 +256,7 @@ void Simulation::retire_burnt() {
   for (int c : burning_) {
     if (arrival[c] + duration_[c] <= time_) {
       state_[c] = kBurnt;
-      if (lattice_) {
-        add_cell_mass(c, -(1.0 - keep) * mass_[c]);
-        add_cell_area(c, burnt_area_);
-        strength_dirty_ = true;
-      }
+      if (shell_) shell_->cell_burnt(c, (1.0 - keep) * mass_[c]);
       mass_[c] *= keep;
     } else {
       burning_[w++] = c;
@@ -345,13 +313,9 @@ RowMatX3 Simulation::cell_positions() const {
 }
 
 RowMatX3 Simulation::vertex_positions() const {
-  if (!lattice_) return sheet_.vertices();
-  RowMatX3 out(sheet_.vertices().rows(), 3);
-  // The lattice's bottom layer is held half a thickness below the floor; the surface itself
-  // never goes through it. Clamped inside deform's pass: a second pass over a strided column
-  // cost as much as the deform itself on a million-vertex mesh.
-  lattice_->deform(vertex_embedding_, out,
-                   params_.has_floor ? params_.floor_z : -std::numeric_limits<double>::infinity());
+  if (!shell_) return sheet_.vertices();
+  RowMatX3 out;
+  shell_->vertex_positions(out);
   return out;
 }
 
@@ -375,6 +339,58 @@ Eigen::VectorXd Simulation::vertex_burnout_times() const {
   const auto& vc = sheet_.vertex_cell();
   for (std::size_t i = 0; i < vc.size(); ++i) out[i] += duration_[vc[i]];
   return out;
+}
+
+}  // namespace thinburn
+
+namespace thinburn {
+
+const StepStats& Simulation::last_step_stats() const { return shell_ ? shell_->last_step_stats() : kNoStats; }
+
+const Eigen::VectorXd& Simulation::control_masses() const { return shell_ ? shell_->control_masses() : kNoMasses; }
+
+void Simulation::set_dynamics_params(const DynamicsParams& p) {
+  if (!shell_) throw std::invalid_argument("dynamics: this simulation has no shell");
+  shell_->set_dynamics_params(p);
+  params_.dynamics = p;
+}
+
+const RowMatX3& Simulation::lattice_positions() const {
+  if (!shell_) throw std::invalid_argument("lattice: this simulation has no shell");
+  return shell_->lattice().positions();
+}
+
+double Simulation::flame_side(int cell) const {
+  // Flames sit on the upper face of a burning cell; on a near-vertical cell the face is a
+  // seeded coin toss, which is what lets a hanging sheet crumple both ways.
+  const double nz = cell_normal(cell).z();
+  if (std::abs(nz) > 0.2) return nz > 0 ? 1.0 : -1.0;
+  return hash_uniform(3, static_cast<std::uint64_t>(cell)) >= 0 ? 1.0 : -1.0;
+}
+
+void Simulation::gather_shell_sources() {
+  // Emitters: the fringe (paper §3.1), each a cell's worth of front length. Ignition points
+  // (eq 3): the burning cells, on their flame face.
+  fringe_into(fringe_buf_);
+  const Eigen::Index k = static_cast<Eigen::Index>(fringe_buf_.size());
+  emit_pos_.resize(k, 3);
+  emit_normal_.resize(k, 3);
+  emit_len_.setConstant(k, std::sqrt(sheet_.du() * sheet_.dv()));
+  for (Eigen::Index e = 0; e < k; ++e) {
+    emit_pos_.row(e) = cell_position(fringe_buf_[e]).transpose();
+    emit_normal_.row(e) = cell_normal(fringe_buf_[e]).transpose();
+  }
+  const double half = 0.5 * shell_->thickness();
+  ignition_pts_.resize(static_cast<Eigen::Index>(burning_.size()), 3);
+  for (std::size_t b = 0; b < burning_.size(); ++b) {
+    const int c = burning_[b];
+    ignition_pts_.row(b) = (cell_position(c) + half * flame_side(c) * cell_normal(c)).transpose();
+  }
+}
+
+void Simulation::step_shell(double dt) {
+  gather_shell_sources();
+  shell_->step(dt, ShellSources{&emit_pos_, &emit_normal_, &emit_len_, &ignition_pts_}, wind_);
 }
 
 }  // namespace thinburn

@@ -8,6 +8,7 @@
 #include "lattice.hpp"
 #include "particles.hpp"
 #include "sheet.hpp"
+#include "shell.hpp"
 
 #include <Eigen/Core>
 
@@ -97,18 +98,20 @@ class Simulation {
   /// @brief grad² at a cell: squared slope of the current surface out of the rest plane.
   double grad2(int cell) const;
 
-  bool has_shell() const { return lattice_ != nullptr; }
-  int lattice_size() const { return M_; }
-  double lattice_thickness() const { return thickness_; }
+  bool has_shell() const { return shell_ != nullptr; }
+  int lattice_size() const { return shell_ ? shell_->size() : 0; }
+  double lattice_thickness() const { return shell_ ? shell_->thickness() : 0.0; }
   /// @brief Control vertices ((2 M^2) x 3), index ((i*M)+j)*2+k, k = 1 top.
   const RowMatX3& lattice_positions() const;
-  const Bending* bending() const { return bending_.get(); }
-  const FfdLattice* lattice() const { return lattice_.get(); }
-  const ParticleSystem* particles() const { return particles_.get(); }
-  const LatticeDynamics* dynamics() const { return dynamics_.get(); }
-  const StepStats& last_step_stats() const { return stats_; }
+  /// @brief The shell's parts (null without a shell).
+  const Shell* shell() const { return shell_.get(); }
+  const Bending* bending() const { return shell_ ? &shell_->bending() : nullptr; }
+  const FfdLattice* lattice() const { return shell_ ? &shell_->lattice() : nullptr; }
+  const ParticleSystem* particles() const { return shell_ ? &shell_->particles() : nullptr; }
+  const LatticeDynamics* dynamics() const { return shell_ ? &shell_->dynamics() : nullptr; }
+  const StepStats& last_step_stats() const;
   /// @brief Per-control-vertex masses now (kg).
-  const Eigen::VectorXd& control_masses() const { return control_mass_; }
+  const Eigen::VectorXd& control_masses() const;
   void set_dynamics_params(const DynamicsParams& p);
 
  private:
@@ -122,15 +125,9 @@ class Simulation {
   void build_locator();
   void refresh_locator() const;
   void retire_burnt();
-  void build_shell(const std::vector<std::uint8_t>& pinned);
-  RowMatX3 drape_lattice() const;
-  void bilinear_couples(double s, double t, int* couple, double* w) const;
-  void cell_couples(int cell, int* couple, double* w) const;
-  void add_cell_mass(int cell, double dm);
-  void add_cell_area(int cell, Eigen::VectorXd& onto) const;  // half to each layer
+  ShellParams shell_params() const;
   void step_shell(double dt);
-  void emit_particles(double dt);
-  void update_pyrolysis();
+  void gather_shell_sources();
   double flame_side(int cell) const;
   double noise(int cell, std::uint64_t stream) const;
   double hash_uniform(std::uint64_t stream, std::uint64_t key) const;
@@ -147,23 +144,13 @@ class Simulation {
   std::vector<double> mass_;
   std::vector<int> burning_;     // the cells burning now: an active list, never a sweep
   std::vector<int> fringe_buf_;
-  // The shell (null when params.shell is off).
-  int M_ = 0;
-  double thickness_ = 0.0;
-  std::unique_ptr<FfdLattice> lattice_;
-  std::unique_ptr<LatticeDynamics> dynamics_;
-  std::unique_ptr<ParticleSystem> particles_;
-  std::unique_ptr<Bending> bending_;
-  Embedding vertex_embedding_;
-  Eigen::VectorXd control_mass_, control_area_, burnt_area_, strength_;
-  bool mass_dirty_ = false;
-  bool strength_dirty_ = false;
-  StepStats stats_;
+  // The shell (null when params.shell is off), and the sources the fire hands it each step.
+  std::unique_ptr<Shell> shell_;
+  RowMatX3 emit_pos_, emit_normal_, ignition_pts_;
+  Eigen::VectorXd emit_len_;
   // Nearest-cell queries for ignite; its displacement bounds follow the lattice lazily.
   std::unique_ptr<CellLocator> locator_;
   mutable bool locator_stale_ = true;
-  RowMatX3 emit_pos_, emit_normal_, ignition_pts_, particle_pos_;
-  Eigen::VectorXd emit_len_, particle_temp_, rotation_, applied_rotation_;
 };
 
 }  // namespace thinburn

@@ -1,0 +1,278 @@
+// The shell half of the model (paper §4): the FFD lattice draped over the sheet, the cells'
+// mass mapped onto it, fire particles, heat and pyrolysis, the rotation D and the motion.
+#include "shell.hpp"
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+namespace thinburn {
+namespace {
+
+constexpr int kPaperCells = 128;  // the paper's grid: 128 x 128 cells (§5)
+
+// M from the sheet: one couple per 16 cells (the paper's Fig. 3 lattice is about this coarse;
+// each couple averages the heat of many cells) and no finer than 2 cm (finer crumples are
+// hardly visible and stiffen the lattice), 4..65 per side.
+int choose_lattice(int N, double size_u, double size_v) {
+  const int by_cells = N / 16 + 1;
+  const int by_size = static_cast<int>(std::min(size_u, size_v) / 0.02) + 1;
+  return std::clamp(std::min(by_cells, by_size), 4, 65);
+}
+
+}  // namespace
+
+Shell::Shell(const Sheet& sheet, const ShellParams& params, const std::vector<double>& cell_mass,
+             const std::vector<std::uint8_t>& pinned)
+    : sheet_(sheet), params_(params) {
+  const int N = sheet_.cells();
+  M_ = params_.lattice > 0 ? params_.lattice : choose_lattice(N, sheet_.size_u(), sheet_.size_v());
+  if (M_ < 2) throw std::invalid_argument("lattice must be >= 2");
+  const double spacing = std::min(sheet_.size_u(), sheet_.size_v()) / (M_ - 1);
+  thickness_ = params_.lattice_thickness > 0 ? params_.lattice_thickness : 0.25 * spacing;
+  lattice_ = std::make_unique<FfdLattice>(M_, drape());
+
+  const RowMatX2& vp = sheet_.vertex_param();
+  RowMatX3 coords(vp.rows(), 3);
+  for (Eigen::Index i = 0; i < vp.rows(); ++i) {
+    const Eigen::Vector2d st = sheet_.lattice_st(vp(i, 0), vp(i, 1), M_);
+    coords.row(i) << st.x(), st.y(), 0.5;
+  }
+  vertex_embedding_ = lattice_->embed(coords, sheet_.vertices());
+
+  // Cell masses and areas onto the couples, half to each layer.
+  control_mass_ = Eigen::VectorXd::Zero(2 * M_ * M_);
+  control_area_ = Eigen::VectorXd::Zero(2 * M_ * M_);
+  burnt_area_ = Eigen::VectorXd::Zero(2 * M_ * M_);
+  for (int c = 0; c < N * N; ++c) {
+    if (!sheet_.inside()[c]) continue;
+    add_cell_mass(c, cell_mass[c]);
+    add_cell_area(c, control_area_);
+  }
+
+  DynamicsParams dp = params_.dynamics;
+  // The mid-surface rests on the floor, so the bottom layer is held half a thickness lower.
+  dp.has_floor = params_.has_floor;
+  dp.floor_z = params_.floor_z - 0.5 * thickness_;
+  dynamics_ = std::make_unique<LatticeDynamics>(*lattice_, dp);
+  mass_dirty_ = true;
+  dynamics_->set_areas(control_area_);
+  if (!pinned.empty()) pin(pinned);
+
+  ParticleParams pp = params_.particles;
+  pp.seed = params_.seed ^ 0x5bd1e995ULL;
+  particles_ = std::make_unique<ParticleSystem>(pp);
+  // Eq 3 sums over the ignition points, the burning cells: the same fire at twice the grid
+  // resolution has four times the points. Each cell counts as its share of a cell of the
+  // paper's 128 x 128 grid, so pyrolysis (and the bend) does not depend on N, and N = 128
+  // is the paper's Cp.
+  BendingParams bp = params_.bending;
+  const double per_paper_cell = static_cast<double>(kPaperCells) / N;
+  bp.cp *= per_paper_cell * per_paper_cell;
+  bending_ = std::make_unique<Bending>(M_ * M_, bp);
+}
+
+void Shell::pin(const std::vector<std::uint8_t>& pinned) {
+  // A pinned vertex holds every couple its position depends on, both layers.
+  const RowMatX2& vp = sheet_.vertex_param();
+  std::vector<std::uint8_t> held(2 * M_ * M_, 0);
+  for (Eigen::Index i = 0; i < vp.rows(); ++i) {
+    if (!pinned[i]) continue;
+    int cp[4];
+    double w[4];
+    const Eigen::Vector2d st = sheet_.lattice_st(vp(i, 0), vp(i, 1), M_);
+    bilinear_couples(st.x(), st.y(), cp, w);
+    for (int k = 0; k < 4; ++k)
+      if (w[k] > 1e-12) held[2 * cp[k]] = held[2 * cp[k] + 1] = 1;
+  }
+  dynamics_->set_pinned(held);
+}
+
+void Shell::bilinear_couples(double s, double t, int* couple, double* w) const {
+  const int i0 = std::clamp(static_cast<int>(std::floor(s)), 0, M_ - 2);
+  const int j0 = std::clamp(static_cast<int>(std::floor(t)), 0, M_ - 2);
+  const double a = std::clamp(s - i0, 0.0, 1.0), b = std::clamp(t - j0, 0.0, 1.0);
+  couple[0] = i0 * M_ + j0;
+  couple[1] = i0 * M_ + j0 + 1;
+  couple[2] = (i0 + 1) * M_ + j0;
+  couple[3] = (i0 + 1) * M_ + j0 + 1;
+  w[0] = (1 - a) * (1 - b);
+  w[1] = (1 - a) * b;
+  w[2] = a * (1 - b);
+  w[3] = a * b;
+}
+
+RowMatX3 Shell::drape() const {
+  // Couple (i, j) sits on the rest surface at parameter (u_j, v_i), its two vertices half the
+  // thickness either side along the surface normal; the cell grid is interpolated (and
+  // extrapolated half a cell at the border) to find that surface point.
+  const int N = sheet_.cells();
+  RowMatX3 rest(2 * M_ * M_, 3);
+  auto sample = [&](const RowMatX3& grid, double fr, double fc) {
+    const int r0 = std::clamp(static_cast<int>(std::floor(fr)), 0, N - 2);
+    const int c0 = std::clamp(static_cast<int>(std::floor(fc)), 0, N - 2);
+    const double a = fr - r0, b = fc - c0;
+    return Eigen::Vector3d(((1 - a) * (1 - b)) * grid.row(r0 * N + c0) + ((1 - a) * b) * grid.row(r0 * N + c0 + 1) +
+                           (a * (1 - b)) * grid.row((r0 + 1) * N + c0) + (a * b) * grid.row((r0 + 1) * N + c0 + 1));
+  };
+  for (int i = 0; i < M_; ++i)
+    for (int j = 0; j < M_; ++j) {
+      const double fr = i * sheet_.size_v() / (M_ - 1) / sheet_.dv() - 0.5;
+      const double fc = j * sheet_.size_u() / (M_ - 1) / sheet_.du() - 0.5;
+      const Eigen::Vector3d mid = sample(sheet_.cell_rest(), fr, fc);
+      Eigen::Vector3d n = sample(sheet_.cell_rest_normal(), fr, fc);
+      n = n.norm() > 0 ? Eigen::Vector3d(n.normalized()) : sheet_.frame().n;
+      rest.row((i * M_ + j) * 2 + 0) = (mid - 0.5 * thickness_ * n).transpose();
+      rest.row((i * M_ + j) * 2 + 1) = (mid + 0.5 * thickness_ * n).transpose();
+    }
+  return rest;
+}
+
+void Shell::cell_couples(int cell, int* couple, double* w) const {
+  const int N = sheet_.cells();
+  const Eigen::Vector2d st = sheet_.lattice_st((cell % N + 0.5) * sheet_.du(), (cell / N + 0.5) * sheet_.dv(), M_);
+  bilinear_couples(st.x(), st.y(), couple, w);
+}
+
+Eigen::Vector3d Shell::cell_position(int cell) const {
+  // Rest position plus the lattice's displacement at the cell centre, mid-thickness: the same
+  // trilinear FFD as the mesh's vertices, evaluated for one point on demand, so only the cells
+  // the front and the emitters touch are ever deformed.
+  Eigen::Vector3d p = sheet_.cell_rest().row(cell).transpose();
+  int cp[4];
+  double w[4];
+  cell_couples(cell, cp, w);
+  const RowMatX3& x = lattice_->positions();
+  const RowMatX3& x0 = lattice_->rest();
+  for (int k = 0; k < 4; ++k)
+    p += (0.5 * w[k]) * (x.row(2 * cp[k]) - x0.row(2 * cp[k]) + x.row(2 * cp[k] + 1) - x0.row(2 * cp[k] + 1)).transpose();
+  return p;
+}
+
+void Shell::quad_displacement_bounds(RowMatX3& lo, RowMatX3& hi) const {
+  // A quad's cells move by convex combinations of its four couples' mid-layer displacements.
+  const RowMatX3& x = lattice_->positions();
+  const RowMatX3& x0 = lattice_->rest();
+  const int q = M_ - 1;
+  lo.resize(q * q, 3);
+  hi.resize(q * q, 3);
+  for (int i = 0; i < q; ++i)
+    for (int j = 0; j < q; ++j) {
+      const int corner[4] = {i * M_ + j, i * M_ + j + 1, (i + 1) * M_ + j, (i + 1) * M_ + j + 1};
+      Eigen::RowVector3d l = Eigen::RowVector3d::Constant(std::numeric_limits<double>::infinity()), h = -l;
+      for (int c : corner) {
+        const Eigen::RowVector3d d = 0.5 * (x.row(2 * c) - x0.row(2 * c) + x.row(2 * c + 1) - x0.row(2 * c + 1));
+        l = l.cwiseMin(d);
+        h = h.cwiseMax(d);
+      }
+      lo.row(i * q + j) = l;
+      hi.row(i * q + j) = h;
+    }
+}
+
+void Shell::add_cell_mass(int cell, double dm) {
+  int cp[4];
+  double w[4];
+  cell_couples(cell, cp, w);
+  for (int k = 0; k < 4; ++k) {
+    control_mass_[2 * cp[k]] += 0.5 * w[k] * dm;
+    control_mass_[2 * cp[k] + 1] += 0.5 * w[k] * dm;
+  }
+  mass_dirty_ = true;
+}
+
+void Shell::add_cell_area(int cell, Eigen::VectorXd& onto) const {
+  int cp[4];
+  double w[4];
+  cell_couples(cell, cp, w);
+  for (int k = 0; k < 4; ++k)
+    for (int layer = 0; layer < 2; ++layer) onto[2 * cp[k] + layer] += 0.5 * w[k] * sheet_.du() * sheet_.dv();
+}
+
+void Shell::cell_burnt(int cell, double mass_lost) {
+  add_cell_mass(cell, -mass_lost);
+  add_cell_area(cell, burnt_area_);
+  strength_dirty_ = true;
+}
+
+void Shell::set_dynamics_params(const DynamicsParams& p) {
+  DynamicsParams dp = p;
+  dp.has_floor = params_.has_floor;
+  dp.floor_z = params_.floor_z - 0.5 * thickness_;
+  dynamics_->set_params(dp);
+  params_.dynamics = p;
+}
+
+void Shell::vertex_positions(RowMatX3& out) const {
+  out.resize(sheet_.vertices().rows(), 3);
+  // The lattice's bottom layer is held half a thickness below the floor; the surface itself
+  // never goes through it. Clamped inside deform's pass: a second pass over a strided column
+  // cost as much as the deform itself on a million-vertex mesh.
+  lattice_->deform(vertex_embedding_, out,
+                   params_.has_floor ? params_.floor_z : -std::numeric_limits<double>::infinity());
+}
+
+void Shell::hand_over_masses_and_strength() {
+  if (mass_dirty_) {
+    // Couples outside the outline carry no sheet; a small floor keeps them integrable.
+    const double floor_mass = 1e-3 * control_mass_.maxCoeff();
+    dynamics_->set_masses(control_mass_.cwiseMax(floor_mass));
+    mass_dirty_ = false;
+  }
+  if (strength_dirty_) {
+    // Ash holds little together (Fig. 9's cloth sinks as it burns): a control vertex keeps
+    // ash_strength of its springs' stiffness over the burnt share of the sheet it carries.
+    strength_.resize(control_area_.size());
+    for (Eigen::Index v = 0; v < strength_.size(); ++v) {
+      const double burnt = control_area_[v] > 0 ? std::min(1.0, burnt_area_[v] / control_area_[v]) : 0.0;
+      strength_[v] = 1.0 - (1.0 - params_.ash_strength) * burnt;
+    }
+    dynamics_->set_strength(strength_);
+    strength_dirty_ = false;
+  }
+}
+
+void Shell::step(double dt, const ShellSources& src, const Eigen::Vector3d& wind) {
+  if (src.emit_pos->rows() > 0) particles_->emit(*src.emit_pos, *src.emit_normal, *src.emit_len, dt);
+  particles_->step(dt, wind);
+  particle_pos_ = particles_->positions();
+  particle_temp_ = particles_->temperatures();
+  bending_->add_particle_heat(lattice_->positions(), particle_pos_, particle_temp_, dt);
+  bending_->set_pyrolysis(lattice_->positions(), *src.ignition_points);
+  hand_over_masses_and_strength();
+  dynamics_->set_wind(wind);
+  bending_->rotation(rotation_);
+  // Far from the fire D creeps by micro-radians as faint heat arrives; passing those on would
+  // keep the whole lattice awake. A couple's applied rotation follows D in steps of at least
+  // kRotationQuantum, so regions at rest sleep while the error stays below that quantum.
+  constexpr double kRotationQuantum = 1e-3;  // rad
+  if (applied_rotation_.size() != rotation_.size()) applied_rotation_ = Eigen::VectorXd::Zero(rotation_.size());
+  for (Eigen::Index c = 0; c < rotation_.size(); ++c)
+    if (std::abs(rotation_[c] - applied_rotation_[c]) >= kRotationQuantum) applied_rotation_[c] = rotation_[c];
+  stats_ = dynamics_->step(dt, applied_rotation_, bending_->heat_rate());
+}
+
+Shell::Checkpoint Shell::checkpoint() const {
+  return Checkpoint{control_mass_, burnt_area_, strength_, applied_rotation_, mass_dirty_, strength_dirty_,
+                    stats_, std::make_unique<ParticleSystem>(*particles_), std::make_unique<Bending>(*bending_),
+                    lattice_->positions(), dynamics_->checkpoint()};
+}
+
+void Shell::rollback(Checkpoint&& c) {
+  control_mass_ = std::move(c.control_mass);
+  burnt_area_ = std::move(c.burnt_area);
+  strength_ = std::move(c.strength);
+  applied_rotation_ = std::move(c.applied_rotation);
+  mass_dirty_ = c.mass_dirty;
+  strength_dirty_ = c.strength_dirty;
+  stats_ = c.stats;
+  particles_ = std::move(c.particles);
+  bending_ = std::move(c.bending);
+  lattice_->positions() = c.lattice;
+  dynamics_->rollback(std::move(c.dynamics));
+}
+
+}  // namespace thinburn

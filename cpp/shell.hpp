@@ -1,0 +1,120 @@
+#pragma once
+/// @brief The shell half of the model (paper §4): the FFD lattice draped over the sheet, the
+/// cells' mass and area mapped onto its couples, fire particles, heat (eq 2), pyrolysis (eq 3),
+/// the rotation D (eqs 4-6) and the lattice's motion (eqs 7-15).
+///
+/// The Shell knows the sheet's geometry but nothing of the fire's rules: each step the
+/// Simulation hands it the emitters (fringe cells) and the ignition points (burning cells on
+/// their flame face), and tells it when a cell burns out.
+#include <Eigen/Core>
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "bending.hpp"
+#include "dynamics.hpp"
+#include "lattice.hpp"
+#include "particles.hpp"
+#include "sheet.hpp"
+
+namespace thinburn {
+
+/// @brief What the shell needs of the simulation's parameters.
+struct ShellParams {
+  int lattice = 0;               ///< M couples per side; 0 chooses from the sheet's size and N
+  double lattice_thickness = 0;  ///< m between a couple's two vertices; 0 chooses
+  bool has_floor = false;
+  double floor_z = 0.0;
+  double ash_strength = 0.1;     ///< share of the springs' stiffness burnt sheet keeps
+  std::uint64_t seed = 0;
+  DynamicsParams dynamics;
+  ParticleParams particles;
+  BendingParams bending;
+};
+
+/// @brief The fire's sources for one step of the shell.
+struct ShellSources {
+  const RowMatX3* emit_pos;          ///< fringe cells' positions (k x 3)
+  const RowMatX3* emit_normal;       ///< their flame-side normals
+  const Eigen::VectorXd* emit_len;   ///< front length each stands for, m
+  const RowMatX3* ignition_points;   ///< burning cells on their flame face (eq 3)
+};
+
+class Shell {
+ public:
+  /// @param cell_mass per cell, kg (0 outside the sheet); @param pinned per input vertex,
+  /// nonzero = held in place (may be empty).
+  Shell(const Sheet& sheet, const ShellParams& params, const std::vector<double>& cell_mass,
+        const std::vector<std::uint8_t>& pinned);
+
+  int size() const { return M_; }
+  double thickness() const { return thickness_; }
+
+  /// @brief The couples a cell's centre sits between and their bilinear weights.
+  void cell_couples(int cell, int* couple, double* w) const;
+  /// @brief A cell centre's position now (mid-thickness of the lattice).
+  Eigen::Vector3d cell_position(int cell) const;
+  /// @brief Per control cell of the lattice ((M-1)^2 rows), the lowest and highest
+  /// displacement its cells can have now: their four couples' extremes.
+  void quad_displacement_bounds(RowMatX3& lo, RowMatX3& hi) const;
+
+  /// @brief A cell burnt out: it loses mass to ash and its share of the lattice's strength.
+  void cell_burnt(int cell, double mass_lost);
+  /// @brief One step: particles from the emitters, heat, pyrolysis, D and the motion.
+  void step(double dt, const ShellSources& sources, const Eigen::Vector3d& wind);
+
+  /// @brief Deformed mesh vertices, raised to the floor where it has one.
+  void vertex_positions(RowMatX3& out) const;
+
+  void set_dynamics_params(const DynamicsParams& p);
+
+  const FfdLattice& lattice() const { return *lattice_; }
+  const LatticeDynamics& dynamics() const { return *dynamics_; }
+  const ParticleSystem& particles() const { return *particles_; }
+  const Bending& bending() const { return *bending_; }
+  const StepStats& last_step_stats() const { return stats_; }
+  /// @brief Per-control-vertex masses now (kg).
+  const Eigen::VectorXd& control_masses() const { return control_mass_; }
+
+  /// @brief Everything a step changes, for a step that may have to be undone.
+  struct Checkpoint;
+  Checkpoint checkpoint() const;
+  void rollback(Checkpoint&& c);
+
+ private:
+  RowMatX3 drape() const;
+  void bilinear_couples(double s, double t, int* couple, double* w) const;
+  void add_cell_mass(int cell, double dm);
+  void add_cell_area(int cell, Eigen::VectorXd& onto) const;  // half to each layer
+  void pin(const std::vector<std::uint8_t>& pinned);
+  void hand_over_masses_and_strength();
+
+  const Sheet& sheet_;
+  ShellParams params_;
+  int M_ = 0;
+  double thickness_ = 0.0;
+  std::unique_ptr<FfdLattice> lattice_;
+  std::unique_ptr<LatticeDynamics> dynamics_;
+  std::unique_ptr<ParticleSystem> particles_;
+  std::unique_ptr<Bending> bending_;
+  Embedding vertex_embedding_;
+  Eigen::VectorXd control_mass_, control_area_, burnt_area_, strength_;
+  bool mass_dirty_ = false;
+  bool strength_dirty_ = false;
+  StepStats stats_;
+  RowMatX3 particle_pos_;
+  Eigen::VectorXd particle_temp_, rotation_, applied_rotation_;
+};
+
+struct Shell::Checkpoint {
+  Eigen::VectorXd control_mass, burnt_area, strength, applied_rotation;
+  bool mass_dirty, strength_dirty;
+  StepStats stats;
+  std::unique_ptr<ParticleSystem> particles;
+  std::unique_ptr<Bending> bending;
+  RowMatX3 lattice;
+  LatticeDynamics::Checkpoint dynamics;
+};
+
+}  // namespace thinburn
