@@ -137,7 +137,9 @@ class Pool {
 
   void grow(int helpers) {
     while (static_cast<int>(workers_.size()) < helpers) {
-      std::thread t([this] { helper_main(); });
+      // Helpers beyond the cores never watch: they would spin on the cores the caller needs.
+      const bool may_watch = static_cast<int>(workers_.size()) + 1 < hardware_threads();
+      std::thread t([this, may_watch] { helper_main(may_watch); });
       t.detach();  // helpers live as long as the process; nothing joins them at exit
       workers_.push_back(t.get_id());
     }
@@ -153,10 +155,10 @@ class Pool {
     }
   }
 
-  void helper_main() {
+  void helper_main(bool may_watch) {
     std::uint64_t seen = generation_.load(std::memory_order_acquire);
     for (;;) {
-      watch(seen);
+      if (may_watch) watch(seen);
       std::shared_ptr<Job> job;
       {
         std::unique_lock<std::mutex> lock(mutex_);
