@@ -1,7 +1,8 @@
 """The threads part of ``python -m thinburn.bench``: does a second thread ever hurt?
 
-Every preset's demo scene at 128² cells with a ~16k-vertex mesh, and a large sheet (paper,
-512² cells, ~100k vertices), are timed on 1 thread and on all logical cores: first on the
+Every preset's demo scene at 128² cells with a ~16k-vertex mesh, and two larger sheets (paper:
+512² cells with ~100k vertices, 128² with ~400k), are timed on 1 thread and on all logical
+cores: first on the
 machine as it is ("quiet"), then with every core loaded by a busy loop in another process
 that the bench starts itself ("busy": what a user sees while Blender renders). Fit rows hold
 the ratio of the all-cores time to the 1-thread time per scene and load; issue #10's goal is
@@ -21,7 +22,7 @@ from .demo import build, default_scene
 from .materials import MATERIALS
 
 GOAL_BUSY_RATIO = 1.10
-SCENES = tuple((m, 128, 16000) for m in MATERIALS) + (("paper", 512, 100000),)
+SCENES = tuple((m, 128, 16000) for m in MATERIALS) + (("paper", 512, 100000), ("paper", 128, 400000))
 
 
 def _spin(stop) -> None:
@@ -68,7 +69,7 @@ def _time_scenes(scenes, counts, frames, warmup, repeat, load, log):
     rows = []
     for material, cells, verts in scenes:
         scene = default_scene(material, vertices=verts)
-        big = cells > 128
+        big = cells > 128 or verts > 20000
         makers = {t: (lambda t=t: build(scene, material, cells=cells, threads=t)) for t in counts}
         timed = _interleaved(makers, frames // 2 if big else frames, warmup // 2 if big else warmup, repeat)
         for threads, (step_ms, pos_ms, stats, sim) in timed.items():

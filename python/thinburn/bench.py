@@ -23,8 +23,8 @@ Parts (in this order; all by default):
                unit of active work against N (fire only; shell with M = 17; shell with the
                default lattice, full runs only); and the cost of an ignite against N (a
                moving igniter lights 64 points a frame in the add-on).
-  threads      every preset's demo scene (128², ~16k vertices) and a large sheet (512², ~100k)
-               on 1 thread and on all cores, on the machine as it is and with every core
+  threads      every preset's demo scene (128², ~16k vertices) and two larger sheets (512² with
+               ~100k vertices; 128² with ~400k) on 1 thread and on all cores, on the machine as it is and with every core
                loaded by processes the bench starts itself: the all-cores / 1-thread ratio.
 
 Writes DIR/results.json (rows {part, method, resolution or dt, error or seconds, ...}; "fit"
