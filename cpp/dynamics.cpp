@@ -624,6 +624,55 @@ void LatticeDynamics::apply_plasticity() {
   });
 }
 
+double LatticeDynamics::max_active_strain() const {
+  const RowMatX3& x = lat_.positions();
+  double worst = 0.0;
+  for (int v : active_)
+    for (int q = inc_start_[v]; q < inc_start_[v + 1]; ++q) {
+      const int s = inc_spring_[q], o = inc_other_[q];
+      if (rest_len_[s] <= 0.0) continue;
+      worst = std::max(worst, std::abs((x.row(o) - x.row(v)).norm() / rest_len_[s] - 1.0));
+    }
+  return worst;
+}
+
+int LatticeDynamics::integrate(double dt, int substeps, StepStats& st) {
+  // The implicit integrator takes one Newton step per substep: springs far from rest break
+  // the linearisation, and a frame-sized step from rest can fling a pinned cloth beyond its
+  // own reach. A step that ends with a spring stretched or squashed by more than
+  // kStretchRedo of its rest length (and by kGrowth times more than at its start) is redone from the
+  // pass's start with more substeps, up to max_substeps, while more substeps still change the
+  // answer: once a redo leaves the worst strain within kConverged of the try before, the
+  // strain is the motion's own (a soft silk), not the step's.
+  constexpr double kStretchRedo = 0.5, kGrowth = 1.5, kConverged = 0.8;
+  constexpr int kMaxRedos = 6;
+  const double before = p_.integrator == Integrator::Implicit ? max_active_strain() : 0.0;
+  double last = std::numeric_limits<double>::infinity();
+  for (;;) {
+    const double h = substeps > 0 ? dt / substeps : 0.0;
+    for (int k = 0; k < substeps; ++k) {
+      if (p_.integrator == Integrator::Implicit)
+        st.cg_iterations += implicit_substep(h);
+      else
+        explicit_substep(h, p_.integrator == Integrator::Explicit);
+      apply_floor(h);
+    }
+    st.max_strain = max_active_strain();
+    if (p_.integrator != Integrator::Implicit || p_.substeps > 0 || substeps == 0 ||
+        substeps >= p_.max_substeps || st.max_strain <= std::max(kStretchRedo, kGrowth * before) ||
+        st.max_strain > kConverged * last || st.stretch_redos >= kMaxRedos)
+      return substeps;
+    last = st.max_strain;
+    for (int a = 0; a < st.awake; ++a) {
+      lat_.positions().row(active_[a]) = x_save_.row(a);
+      vel_.row(active_[a]) = v_save_.row(a);
+    }
+    ++st.stretch_redos;
+    const double grow = std::ceil(st.max_strain / kStretchRedo);
+    substeps = static_cast<int>(std::min<double>(p_.max_substeps, substeps * std::max(2.0, grow)));
+  }
+}
+
 int LatticeDynamics::choose_substeps(double dt, double omega, double c_eff) const {
   if (p_.substeps > 0) return p_.substeps;
   if (p_.integrator != Integrator::Implicit) {
@@ -1188,14 +1237,7 @@ StepStats LatticeDynamics::step(double dt, const Eigen::VectorXd& D, const Eigen
         x_save_.row(a) = lat_.positions().row(active_[a]);
         v_save_.row(a) = vel_.row(active_[a]);
       }
-      const double h = st.substeps > 0 ? dt / st.substeps : 0.0;
-      for (int k = 0; k < st.substeps; ++k) {
-        if (p_.integrator == Integrator::Implicit)
-          st.cg_iterations += implicit_substep(h);
-        else
-          explicit_substep(h, p_.integrator == Integrator::Explicit);
-        apply_floor(h);
-      }
+      st.substeps = integrate(dt, st.substeps, st);
       if (!p_.sleeping || pass >= kMaxPasses) break;
       // Redo the step with the sleepers its motion stressed awake, unless they are few next to
       // the awake set: those join the next step (a step late) rather than cost a whole pass.

@@ -84,6 +84,8 @@ struct StepStats {
   int factorizations = 0; ///< block LDL^T factorizations (Ldlt preconditioner), all substeps and passes
   double omega_max = 0;   ///< rad/s, bound on the largest frequency of the awake lattice
   int passes = 0;         ///< integrations of the step (> 1 when it woke sleepers and redid it)
+  double max_strain = 0;  ///< largest |l / L - 1| of an awake vertex's springs at the step's end
+  int stretch_redos = 0;  ///< integrations redone with more substeps because a spring overstretched
 };
 
 /// @brief Springs, forces and integration of an FfdLattice's control vertices.
@@ -169,6 +171,8 @@ class LatticeDynamics {
   Eigen::Vector3d vertex_force(int v, const RowMatX3& x, const RowMatX3& vel) const;
   Eigen::Vector3d couple_normal(int v, const RowMatX3& x) const;
   int choose_substeps(double dt, double omega, double c_eff) const;
+  int integrate(double dt, int substeps, StepStats& st);
+  double max_active_strain() const;
   double max_damping_rate() const;
   void explicit_substep(double h, bool paper);
   int implicit_substep(double h);
