@@ -214,3 +214,20 @@ def test_drape_places_couples_across_the_surface():
         drape(mid, np.zeros_like(mid), 0.01)
     with pytest.raises(ValueError, match="M must be"):
         flat_rest(1, 1.0, 1.0, 0.01)
+
+
+def test_index_and_builders_name_their_arguments():
+    lat = _core.FfdLattice(3, flat_rest(3, 1.0, 1.0, 0.1))
+    assert lat.index(2, 1, 1) == ((2 * 3) + 1) * 2 + 1
+    for args, name in (((3, 0, 0), "i"), ((-1, 0, 0), "i"), ((0, 3, 0), "j"), ((0, 0, 2), "k")):
+        with pytest.raises(ValueError, match=f"^{name} must"):
+            lat.index(*args)
+    with pytest.raises(TypeError, match="width"):
+        flat_rest(3, "1", 1.0, 0.1)
+    with pytest.raises(ValueError, match="height"):
+        flat_rest(3, 1.0, np.nan, 0.1)
+    with pytest.raises(ValueError, match="origin"):
+        flat_rest(3, 1.0, 1.0, 0.1, origin=(0.0, 0.0))
+    with pytest.raises(TypeError, match="thickness"):
+        drape(np.zeros((2, 2, 3)), np.ones((2, 2, 3)), "x")
+    assert flat_rest(np.int64(3), np.float32(1.0), 1, 0.1).shape == (18, 3)

@@ -102,7 +102,16 @@ void define_lattice(py::module_& m) {
                              "Rest control positions ((2 M^2) x 3).")
       .def_property_readonly("M", &FfdLattice::M, "Couples per side.")
       .def_property_readonly("size", &FfdLattice::size, "Number of control vertices, 2 M^2.")
-      .def("index", &FfdLattice::index, "i"_a, "j"_a, "k"_a, "Index of control vertex (i, j, k).");
+      .def(
+          "index",
+          [](const FfdLattice& self, int i, int j, int k) {
+            const int M = self.M();
+            if (i < 0 || i >= M) throw py::value_error("i must be in [0, M) = [0, " + std::to_string(M) + ")");
+            if (j < 0 || j >= M) throw py::value_error("j must be in [0, M) = [0, " + std::to_string(M) + ")");
+            if (k != 0 && k != 1) throw py::value_error("k must be 0 (bottom) or 1 (top)");
+            return self.index(i, j, k);
+          },
+          "i"_a, "j"_a, "k"_a, "Index of control vertex (i, j, k).");
 }
 
 }  // namespace thinburn::bind
