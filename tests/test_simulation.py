@@ -467,3 +467,14 @@ def test_pinned_refuses_an_ambiguous_0_1_integer_array():
         thinburn.Simulation(v, f, cells=8, pinned=["a", "b"])
     with pytest.raises(TypeError, match="pinned"):
         thinburn.Simulation(v, f, cells=8, pinned=np.array([0.5, 1.0]))
+
+
+def test_run_refuses_an_endless_loop_and_shell_takes_numpy_bools(small):
+    sim = thinburn.Simulation(*small, cells=8, shell=np.bool_(False))
+    assert not sim._sim.has_shell
+    for duration, dt in ((1e300, 1 / 24), (1.0, 1e-300), (1e7 + 1, 1.0)):
+        with pytest.raises(ValueError, match="duration.*steps"):
+            sim.run(duration, dt)
+    assert sim.time == 0.0
+    sim.run(0.5, dt=0.25)
+    assert sim.time == 0.5

@@ -24,6 +24,9 @@ MAX_LATTICE = 129
 # Wind, m/s: 1e10 still gives finite results, 1e150 fails inside a step (particle normals
 # overflow) and 1e300 silently does nothing; no real wind comes near 1000 m/s.
 MAX_WIND = 1e3
+# Simulation.run: duration / dt beyond this many steps (hours even at a millisecond a step)
+# is refused rather than looping for ever (run(1e300) did).
+MAX_RUN_STEPS = 10_000_000
 CRUMPLE_REFERENCE_K = 0.05  # Table 1's K_structure for paper: its crumple gain is 1
 
 # Keyword overrides of the shell's parts, passed on to the core's parameter groups (which
@@ -128,9 +131,9 @@ class Simulation:
         p = self._params(self.material, V.integer(cells, "cells", low=2, high=4096),
                          V.integer(seed, "seed", low=0, high=2**63 - 1),
                          V.choice(front, "front", FRONT_METHODS), params)
-        if not isinstance(shell, bool):
+        if not isinstance(shell, (bool, np.bool_)):
             raise TypeError(f"shell must be a bool, got {type(shell).__name__}")
-        p.shell = shell
+        p.shell = bool(shell)
         if lattice is not None:
             p.lattice = V.integer(lattice, "lattice", low=2)
             if p.lattice > MAX_LATTICE:
@@ -219,10 +222,15 @@ class Simulation:
         self._sim.step(d)
 
     def run(self, duration, dt=1 / 24, callback=None) -> None:
-        """Step until `duration` more seconds have passed; callback(sim) after each step."""
+        """Step until `duration` more seconds have passed; callback(sim) after each step.
+        At most ``MAX_RUN_STEPS`` (1e7) steps: more raise ValueError naming ``duration``."""
         total = V.real(duration, "duration", low=0.0)
         d = V.real(dt, "dt", low=0.0, low_open=True)
-        steps = int(np.ceil(total / d - 1e-9))
+        steps = total / d
+        if steps > MAX_RUN_STEPS:
+            raise ValueError(f"duration: {total:g} s at dt = {d:g} s is {steps:.3g} steps, more than "
+                             f"{MAX_RUN_STEPS:.0e}; use a larger dt or a shorter duration")
+        steps = int(np.ceil(steps - 1e-9))
         for _ in range(steps):
             self.step(d)
             if callback is not None:
