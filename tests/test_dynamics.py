@@ -849,6 +849,9 @@ def test_stability_limit_checks_its_numbers():
     assert _core.explicit_stability_limit("explicit", np.float32(2.0), np.int64(0)) == pytest.approx(np.sqrt(2) / 2)
     with pytest.raises(TypeError, match="area"):
         vertex_masses(4, "1", 0.08)
+    for bad in ([1, 2], None, 3):
+        with pytest.raises(TypeError, match="name"):
+            preset(bad)
 
 
 def test_parameter_dicts_name_their_keys():

@@ -230,4 +230,9 @@ def test_index_and_builders_name_their_arguments():
         flat_rest(3, 1.0, 1.0, 0.1, origin=(0.0, 0.0))
     with pytest.raises(TypeError, match="thickness"):
         drape(np.zeros((2, 2, 3)), np.ones((2, 2, 3)), "x")
+    for bad in ("x", {"a": 1}, np.full((2, 2, 3), 1 + 2j)):
+        with pytest.raises(TypeError, match="mid"):
+            drape(bad, np.ones((2, 2, 3)), 0.1)
+    with pytest.raises(ValueError, match="normals"):
+        drape(np.zeros((2, 2, 3)), np.ones((2, 2)), 0.1)
     assert flat_rest(np.int64(3), np.float32(1.0), 1, 0.1).shape == (18, 3)

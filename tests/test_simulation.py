@@ -478,3 +478,18 @@ def test_run_refuses_an_endless_loop_and_shell_takes_numpy_bools(small):
     assert sim.time == 0.0
     sim.run(0.5, dt=0.25)
     assert sim.time == 0.5
+
+
+def test_odd_values_found_by_the_api_sweep_are_named(small):
+    v, f = small
+    with pytest.raises(ValueError, match="lattice"):
+        thinburn.Simulation(v, f, cells=8, lattice=2**70)  # was pybind's 'incompatible function arguments'
+    for bad in (np.array([-1e308]), np.array([1e300, 2.0])):  # was a RuntimeWarning from the int cast
+        with pytest.raises(ValueError, match="pinned.*out of range"):
+            thinburn.Simulation(v, f, cells=8, pinned=bad)
+    with pytest.raises(ValueError, match="faces.*out of range"):
+        thinburn.Simulation(v, np.full((2, 3), -1e308), cells=8)
+    sim = thinburn.Simulation(v, f, cells=8)
+    with pytest.raises(TypeError, match="callback"):
+        sim.run(0.1, 0.05, callback="print")
+    assert sim.time == 0.0

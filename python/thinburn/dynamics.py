@@ -31,6 +31,8 @@ PRESETS = {
 
 def preset(name: str, **overrides) -> dict:
     """Keyword arguments for LatticeDynamics from a Table 1 preset, with overrides."""
+    if not isinstance(name, str):
+        raise TypeError(f"name must be a str, one of {sorted(PRESETS)}, got {type(name).__name__}")
     if name not in PRESETS:
         raise ValueError(f"name must be one of {sorted(PRESETS)}, got {name!r}")
     return {**PRESETS[name], **overrides}

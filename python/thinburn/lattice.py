@@ -27,8 +27,8 @@ def drape(mid: np.ndarray, normals: np.ndarray, thickness: float) -> np.ndarray:
     mid, normals: (M, M, 3) arrays (normals need not be unit; they are normalised).
     Returns the (2 M^2) x 3 rest positions.
     """
-    mid = np.asarray(mid, dtype=np.float64)
-    normals = np.asarray(normals, dtype=np.float64)
+    mid = V.real_array(mid, "mid", (-1, -1, 3), finite=False)
+    normals = V.real_array(normals, "normals", (-1, -1, 3), finite=False)
     if mid.ndim != 3 or mid.shape[0] != mid.shape[1] or mid.shape[2] != 3 or mid.shape[0] < 2:
         raise ValueError(f"mid must have shape (M, M, 3) with M >= 2, got {mid.shape}")
     if normals.shape != mid.shape:

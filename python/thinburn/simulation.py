@@ -135,12 +135,13 @@ class Simulation:
             raise TypeError(f"shell must be a bool, got {type(shell).__name__}")
         p.shell = bool(shell)
         if lattice is not None:
-            p.lattice = V.integer(lattice, "lattice", low=2)
-            if p.lattice > MAX_LATTICE:
-                raise ValueError(f"lattice must be <= {MAX_LATTICE}, got {p.lattice}: a step's cost grows as "
+            m = V.integer(lattice, "lattice", low=2)
+            if m > MAX_LATTICE:
+                raise ValueError(f"lattice must be <= {MAX_LATTICE}, got {m}: a step's cost grows as "
                                  "M^2 (one core, an A4 sheet at 128 cells: M = 65 about 2 s a step, M = 129 "
                                  "about 10 s, M = 257 over 40 s); use lattice=None (chosen from the sheet, "
                                  "at most 65) or a smaller M")
+            p.lattice = m
         if floor is not None:
             p.has_floor, p.floor_z = True, V.real(floor, "floor")
             if float(verts[:, 2].min()) < p.floor_z - 1e-9:
@@ -226,6 +227,8 @@ class Simulation:
         At most ``MAX_RUN_STEPS`` (1e7) steps: more raise ValueError naming ``duration``."""
         total = V.real(duration, "duration", low=0.0)
         d = V.real(dt, "dt", low=0.0, low_open=True)
+        if callback is not None and not callable(callback):
+            raise TypeError(f"callback must be callable or None, got {type(callback).__name__}")
         steps = total / d
         if steps > MAX_RUN_STEPS:
             raise ValueError(f"duration: {total:g} s at dt = {d:g} s is {steps:.3g} steps, more than "
