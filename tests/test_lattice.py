@@ -236,3 +236,17 @@ def test_index_and_builders_name_their_arguments():
     with pytest.raises(ValueError, match="normals"):
         drape(np.zeros((2, 2, 3)), np.ones((2, 2)), 0.1)
     assert flat_rest(np.int64(3), np.float32(1.0), 1, 0.1).shape == (18, 3)
+
+
+def test_assigning_positions_names_them():
+    lat = _core.FfdLattice(3, flat_rest(3, 1.0, 1.0, 0.1))
+    for bad in ("x", None, {"a": 1}, np.zeros((18, 3)) + 1j, np.zeros((18, 3), bool)):
+        with pytest.raises(TypeError, match="positions"):
+            lat.positions = bad  # was pybind's 'incompatible function arguments' naming no one
+    for bad in (np.nan, np.zeros((18, 2)), np.full((18, 3), np.inf)):
+        with pytest.raises(ValueError, match="positions"):
+            lat.positions = bad
+    lat.positions = np.asfortranarray(lat.rest + 1.0)
+    np.testing.assert_array_equal(lat.positions, lat.rest + 1.0)
+    lat.positions = np.zeros((18, 3), dtype=np.int32)
+    assert np.all(lat.positions == 0.0)
