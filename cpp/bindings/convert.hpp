@@ -70,9 +70,13 @@ inline int to_int(const std::string& key, const pybind11::handle& h, long long l
   int overflow = 0;
   const long long v = PyLong_AsLongLongAndOverflow(i.ptr(), &overflow);
   if (PyErr_Occurred()) PyErr_Clear();
-  if (overflow != 0 || v < lo || v > hi)
+  if (overflow != 0 || v < lo || v > hi) {
+    const std::string got = pybind11::str(i).cast<std::string>();
+    if (lo == INT_MIN && hi == INT_MAX)  // the field's own bounds are checked with the others
+      throw pybind11::value_error(key + " must fit a C int (32 bits), got " + got);
     throw pybind11::value_error(key + " must be in [" + std::to_string(lo) + ", " + std::to_string(hi) +
-                                "], got " + pybind11::str(i).cast<std::string>());
+                                "], got " + got);
+  }
   return static_cast<int>(v);
 }
 
