@@ -105,8 +105,12 @@ void validate(const DynamicsParams& p) {
   require(std::isfinite(p.floor_z), "floor_z must be finite");
   require(std::isfinite(p.crumple_gain), "crumple_gain must be finite");
   require(p.plasticity >= 0.0 && p.plasticity <= 1.0, "plasticity must be in [0, 1]");
-  require(p.substeps >= 0, "substeps must be >= 0");
-  require(p.max_substeps >= 1, "max_substeps must be >= 1");
+  require(p.substeps >= 0 && p.substeps <= kMaxFixedSubsteps,
+          "substeps must be in [0, " + std::to_string(kMaxFixedSubsteps) + "] (0: chosen per step), got " +
+              std::to_string(p.substeps) + "; every substep is run, so use 0 and let max_substeps cap them");
+  require(p.max_substeps >= 1 && p.max_substeps <= kMaxSubstepsCeiling,
+          "max_substeps must be in [1, " + std::to_string(kMaxSubstepsCeiling) + "], got " +
+              std::to_string(p.max_substeps) + "; beyond that use the implicit integrator");
   require(p.safety > 0.0 && p.safety <= 1.0, "safety must be in (0, 1]");
   require(p.max_stretch > 0.0 && std::isfinite(p.max_stretch), "max_stretch must be > 0");
   require(p.cg_tolerance > 0.0 && p.cg_tolerance < 1.0, "cg_tolerance must be in (0, 1)");
@@ -644,7 +648,7 @@ int LatticeDynamics::integrate(double dt, int substeps, StepStats& st) {
   // pass's start with more substeps, up to max_substeps, while more substeps still change the
   // answer: once a redo leaves the worst strain within kConverged of the try before, the
   // strain is the motion's own (a soft silk), not the step's.
-  constexpr double kStretchRedo = 0.5, kGrowth = 1.5, kConverged = 0.8;
+  constexpr double kStretchRedo = 0.25, kGrowth = 1.5, kConverged = 0.8;
   constexpr int kMaxRedos = 6;
   const double before = p_.integrator == Integrator::Implicit ? max_active_strain() : 0.0;
   double last = std::numeric_limits<double>::infinity();

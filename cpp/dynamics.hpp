@@ -29,6 +29,12 @@ enum class Preconditioner {
   Jacobi  ///< couple-block Jacobi (each couple's 6 x 6 block inverted), rebuilt every substep
 };
 
+/// Bounds where a step's cost explodes (each substep is a sweep, implicit: a linear solve, over
+/// the awake lattice; measured 7-60 us at M = 4, 0.3 s implicit at M = 33): a fixed substep
+/// count runs every substep, max_substeps only caps what an explicit step may ask for.
+constexpr int kMaxFixedSubsteps = 10000;
+constexpr int kMaxSubstepsCeiling = 1000000;
+
 /// @brief Parameters of the lattice's motion; may change between steps.
 struct DynamicsParams {
   double k_structure = 0.05;   ///< Table 1 coefficient of the axis-neighbour springs (per layer)
@@ -56,8 +62,8 @@ struct DynamicsParams {
   /// and are woken again step after step, each time redoing the step (a pass) and changing the
   /// active set (a new factorization). A vertex that flickers again is held twice as long.
   int wake_hold = 12;
-  int substeps = 0;            ///< 0: chosen per step from stability (explicit) or motion (implicit)
-  int max_substeps = 10000;    ///< explicit steps needing more throw std::runtime_error
+  int substeps = 0;            ///< 0: chosen per step from stability (explicit) or motion (implicit); <= kMaxFixedSubsteps
+  int max_substeps = 10000;    ///< explicit steps needing more throw std::runtime_error; <= kMaxSubstepsCeiling
   double safety = 0.9;         ///< explicit substep h = safety * (theoretical stability limit)
   double max_stretch = 0.25;   ///< implicit: largest relative change of a spring per substep
   double cg_tolerance = 1e-8;  ///< relative residual of the conjugate gradients

@@ -32,8 +32,8 @@ double drive_sq(const LocalSpeed& s) { return s.e_row * s.e_row + s.e_col * s.e_
 // gives q(p) = w|p|^2 + 2 e.p / v - 1/v^2 = 0, a quadratic in d. Of its roots on the h = +1
 // sheet (1/v - e.p >= 0) the larger is kept: as d grows, p takes the upwind signs (the
 // smaller root, if any, has T decreasing away from a neighbour). False if there is none.
-bool eikonal_root(const double P[2], const double pl[2], const LocalSpeed& s, double* d) {
-  const double w = 1.0 - drive_sq(s), iv = 1.0 / s.v;
+bool eikonal_root_scaled(const double P[2], const double pl[2], double iv, const LocalSpeed& s, double* d) {
+  const double w = 1.0 - drive_sq(s);
   const double e[2] = {s.e_row, s.e_col};
   const double A = w * (P[0] * P[0] + P[1] * P[1]);
   if (!(A > 0.0)) return false;
@@ -58,14 +58,41 @@ bool eikonal_root(const double P[2], const double pl[2], const LocalSpeed& s, do
   return false;
 }
 
+// The quadratic is solved in scaled variables, by powers of two (exact): d = sd D, and the
+// equation, homogeneous of degree 2 in (P, pl, 1/v), divided through by k^2. Unscaled, its
+// coefficients go as 1/v^2 and 1/v^4 and over- or underflowed for speeds outside about
+// 1e-70..1e80 m/s (the arrival times then came out wrong; r5).
+bool eikonal_root(const double P_in[2], const double pl_in[2], const LocalSpeed& s, double* d) {
+  const double pm = std::max(std::abs(P_in[0]), std::abs(P_in[1]));
+  if (!(pm > 0.0) || !std::isfinite(pm)) return false;
+  const double iv_in = 1.0 / s.v;
+  if (!(iv_in > 0.0) || !std::isfinite(iv_in)) return false;
+  const int ed = std::ilogb(iv_in) - std::ilogb(pm);  // d's scale: 1/v over |P|
+  double P[2] = {std::ldexp(P_in[0], ed), std::ldexp(P_in[1], ed)};
+  const double big = std::max({std::abs(P[0]), std::abs(P[1]), std::abs(pl_in[0]), std::abs(pl_in[1]), iv_in});
+  if (!std::isfinite(big)) return false;
+  const int ek = -std::ilogb(big);
+  P[0] = std::ldexp(P[0], ek), P[1] = std::ldexp(P[1], ek);
+  const double pl[2] = {std::ldexp(pl_in[0], ek), std::ldexp(pl_in[1], ek)};
+  const double iv = std::ldexp(iv_in, ek);
+  if (!eikonal_root_scaled(P, pl, iv, s, d)) return false;
+  *d = std::ldexp(*d, ed);
+  return true;
+}
+
 // The characteristic direction grad_p h(p) (along p when isotropic).
-void characteristic(const double p[2], const LocalSpeed& s, double g[2]) {
+void characteristic(const double p_in[2], const LocalSpeed& s, double g[2]) {
   if (s.e_row == 0.0 && s.e_col == 0.0) {
-    g[0] = p[0], g[1] = p[1];
+    g[0] = p_in[0], g[1] = p_in[1];
     return;
   }
   const double w = 1.0 - drive_sq(s);
   const double e[2] = {s.e_row, s.e_col};
+  // Scaled by a power of two (the direction does not change) so that S neither over- nor
+  // underflows at extreme speeds.
+  const double pm = std::max(std::abs(p_in[0]), std::abs(p_in[1]));
+  const int ek = pm > 0.0 && std::isfinite(pm) ? -std::ilogb(pm) : 0;
+  const double p[2] = {std::ldexp(p_in[0], ek), std::ldexp(p_in[1], ek)};
   const double ep = e[0] * p[0] + e[1] * p[1];
   const double S = std::sqrt(w * (p[0] * p[0] + p[1] * p[1]) + ep * ep);
   for (int k = 0; k < 2; ++k) g[k] = e[k] + (w * p[k] + ep * e[k]) / S;

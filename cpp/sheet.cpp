@@ -231,9 +231,19 @@ void Sheet::build_vertex_weights() {
 void Sheet::cells_to_vertices(const double* cell_values, double* out) const {
   const Eigen::Index nv = vertices_.rows();
   for (Eigen::Index i = 0; i < nv; ++i) {
-    double s = 0;
-    for (int k = 0; k < 4; ++k) s += vw_weight_[4 * i + k] * cell_values[vw_cell_[4 * i + k]];
-    out[i] = s;
+    // A convex combination (weights >= 0 summing to 1 up to rounding): the result is clamped to
+    // the range of the values it combines, so that ones map to exactly 1 and a field in [0, 1]
+    // (char) stays in [0, 1]; rounding of the weights' sum alone gave 1 + 1 ulp.
+    double s = 0, lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (int k = 0; k < 4; ++k) {
+      const double w = vw_weight_[4 * i + k];
+      if (w == 0.0) continue;
+      const double c = cell_values[vw_cell_[4 * i + k]];
+      s += w * c;
+      lo = std::min(lo, c);
+      hi = std::max(hi, c);
+    }
+    out[i] = lo <= hi ? std::clamp(s, lo, hi) : s;
   }
 }
 

@@ -153,7 +153,11 @@ def test_ffd_rows_and_bound(perf_rows):
             r["bandwidth_bytes_per_second"] / r["bytes_per_point"], rel=1e-12)
         assert r["bandwidth_bytes_per_second"] == bw[0]["bytes_per_second"]  # the best probe
         assert r["vertices_per_second"] == pytest.approx(r["resolution"] / r["seconds"], rel=1e-12)
-        assert 0 < r["fraction"] < 1.5, r
+        # The fraction of the bound reached is a measurement of this machine under its load
+        # now, so only its definition is checked here (no timing thresholds in the tests).
+        _finite_positive(r, "fraction")
+        assert r["fraction"] == pytest.approx(r["vertices_per_second"] / r["bound_vertices_per_second"],
+                                              rel=1e-12)
 
 
 def test_ffd_bytes_per_point_counts_the_embedding_arrays():

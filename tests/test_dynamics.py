@@ -800,3 +800,71 @@ def test_sheet_on_the_floor_stays_upright_under_a_random_crumple(integrator):
         dyn.step(1 / 24, D, heat)
         assert_upright(lat, th, -th / 2)
     assert np.abs(lat.positions - lat.rest).max() > 1e-3  # it did crumple
+
+
+def test_keyword_values_of_the_wrong_type_name_the_key():
+    """Repro r6: pybind's RuntimeError 'Unable to cast' reached the user; now every keyword of
+    LatticeDynamics (and set_params) gives a TypeError or ValueError naming it."""
+    M = 3
+    lat = _core.FfdLattice(M, centred_rest(M, 0.03, 0.003))
+    cases = [(dict(gravity=9.81), TypeError, "gravity"), (dict(gravity="down"), TypeError, "gravity"),
+             (dict(gravity=(0, 0)), ValueError, "gravity"), (dict(gravity=(0, 0, np.nan)), ValueError, "gravity"),
+             (dict(substeps=1.5), TypeError, "substeps"), (dict(substeps=2**40), ValueError, "substeps"),
+             (dict(max_substeps=2**31), ValueError, "max_substeps"), (dict(wake_hold=np.float64(2)), TypeError, "wake_hold"),
+             (dict(k_structure="1"), TypeError, "k_structure"), (dict(k_structure=None), TypeError, "k_structure"),
+             (dict(k_structure=10**400), ValueError, "k_structure"), (dict(buoyancy=np.inf), ValueError, "buoyancy"),
+             (dict(floor_z=[0.0]), TypeError, "floor_z"), (dict(has_floor=np.int64(1)), TypeError, "has_floor"),
+             (dict(cg_max_iterations=-2**63), ValueError, "cg_max_iterations"),
+             (dict(integrator=None), TypeError, "integrator"), (dict(preconditioner=1.0), TypeError, "preconditioner")]
+    for kw, exc, name in cases:
+        with pytest.raises(exc, match=name):
+            _core.LatticeDynamics(lat, **kw)
+    dyn = _core.LatticeDynamics(lat, substeps=np.int64(3), k_structure=np.float32(2.0), sleeping=np.bool_(False),
+                                gravity=np.array([0.0, 0.0, -1.0]))
+    assert dyn.params["substeps"] == 3 and dyn.params["k_structure"] == 2.0 and dyn.params["sleeping"] is False
+    before = dyn.params
+    for kw, exc, name in cases:
+        with pytest.raises(exc, match=name):
+            dyn.set_params(**kw)
+    assert dyn.params == before
+
+
+def test_substep_ceilings():
+    M = 3
+    lat = _core.FfdLattice(M, centred_rest(M, 0.03, 0.003))
+    dyn = _core.LatticeDynamics(lat, substeps=10000, max_substeps=1000000)
+    assert dyn.params["substeps"] == 10000
+    with pytest.raises(ValueError, match=r"substeps must be in \[0, 10000\]"):
+        dyn.set_params(substeps=10001)
+    with pytest.raises(ValueError, match=r"max_substeps must be in \[1, 1000000\]"):
+        dyn.set_params(max_substeps=1000001)
+
+
+def test_stability_limit_checks_its_numbers():
+    for bad, exc in ((np.nan, ValueError), (-1.0, ValueError), ("1", TypeError), (True, TypeError)):
+        with pytest.raises(exc, match="omega"):
+            _core.explicit_stability_limit("explicit", bad)
+        with pytest.raises(exc, match="c"):
+            _core.explicit_stability_limit("explicit", 1.0, bad)
+    assert _core.explicit_stability_limit("explicit", np.float32(2.0), np.int64(0)) == pytest.approx(np.sqrt(2) / 2)
+    with pytest.raises(TypeError, match="area"):
+        vertex_masses(4, "1", 0.08)
+    for bad in ([1, 2], None, 3):
+        with pytest.raises(TypeError, match="name"):
+            preset(bad)
+
+
+def test_parameter_dicts_name_their_keys():
+    p = _core.SimulationParams()
+    with pytest.raises(TypeError, match="parameter names must be str"):
+        p.set_dynamics({1: 2.0})
+    with pytest.raises(TypeError, match="capacity"):
+        p.set_particles({"capacity": 1.5})
+    with pytest.raises(ValueError, match="capacity"):
+        p.set_particles({"capacity": 10**12})
+    with pytest.raises(TypeError, match="birth_rate"):
+        p.set_particles({"birth_rate": "many"})
+    with pytest.raises(TypeError, match="heat_fast"):
+        p.set_bending({"heat_fast": "x"})
+    with pytest.raises(ValueError, match="alpha"):
+        p.set_bending({"alpha": np.nan})

@@ -494,3 +494,30 @@ def test_core_class_rejects_bad_input():
         front.advance(np.nan)
     with pytest.raises(ValueError, match="cell"):
         front.accepted(16)
+
+
+# --- speeds over the whole double range (repro r5) -------------------------------------------
+# The second-order update solved a quadratic whose coefficients go as 1/v^2 and 1/v^4: "fmm"
+# (the default) was wrong outside about 1e-70..1e80 m/s. It is now solved in variables scaled by
+# powers of two; measured: t(k v) k = t(v) to 1.3e-15 (fmm), 4.7e-16 (fmm1), exactly (cellular)
+# for k = 1e-300 .. 1e300, with and without a drive.
+
+@pytest.mark.parametrize("method", FRONT_METHODS)
+@pytest.mark.parametrize("drive", [None, (0.3, -0.2)])
+def test_arrival_times_scale_exactly_with_one_over_speed(method, drive):
+    rng = np.random.default_rng(1)
+    base = 1.0 + rng.uniform(0.0, 1.0, (12, 12))
+    src = [(2.3, 4.6)]
+    ref = arrival_times(base, src, 0.5, method, drive)
+    far = ref > 0.0
+    for e in range(-300, 301, 25):
+        k = 10.0 ** e
+        t = arrival_times(base * k, src, 0.5, method, drive)
+        assert np.all(np.isfinite(t)), e
+        np.testing.assert_allclose(t[far] * k, ref[far], rtol=4e-15, atol=0.0, err_msg=f"k = 1e{e}")
+
+
+@pytest.mark.parametrize("speed", [1e-300, 1e-160, 1e-100, 1e100, 1e160, 1e300])
+def test_uniform_extreme_speed_is_exact_with_the_default_method(speed):
+    t = arrival_times(np.full((8, 8), speed), [(0, 0)])
+    assert t.max() * speed == pytest.approx(math.hypot(7, 7), rel=1e-15)

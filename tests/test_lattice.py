@@ -214,3 +214,39 @@ def test_drape_places_couples_across_the_surface():
         drape(mid, np.zeros_like(mid), 0.01)
     with pytest.raises(ValueError, match="M must be"):
         flat_rest(1, 1.0, 1.0, 0.01)
+
+
+def test_index_and_builders_name_their_arguments():
+    lat = _core.FfdLattice(3, flat_rest(3, 1.0, 1.0, 0.1))
+    assert lat.index(2, 1, 1) == ((2 * 3) + 1) * 2 + 1
+    for args, name in (((3, 0, 0), "i"), ((-1, 0, 0), "i"), ((0, 3, 0), "j"), ((0, 0, 2), "k")):
+        with pytest.raises(ValueError, match=f"^{name} must"):
+            lat.index(*args)
+    with pytest.raises(TypeError, match="width"):
+        flat_rest(3, "1", 1.0, 0.1)
+    with pytest.raises(ValueError, match="height"):
+        flat_rest(3, 1.0, np.nan, 0.1)
+    with pytest.raises(ValueError, match="origin"):
+        flat_rest(3, 1.0, 1.0, 0.1, origin=(0.0, 0.0))
+    with pytest.raises(TypeError, match="thickness"):
+        drape(np.zeros((2, 2, 3)), np.ones((2, 2, 3)), "x")
+    for bad in ("x", {"a": 1}, np.full((2, 2, 3), 1 + 2j)):
+        with pytest.raises(TypeError, match="mid"):
+            drape(bad, np.ones((2, 2, 3)), 0.1)
+    with pytest.raises(ValueError, match="normals"):
+        drape(np.zeros((2, 2, 3)), np.ones((2, 2)), 0.1)
+    assert flat_rest(np.int64(3), np.float32(1.0), 1, 0.1).shape == (18, 3)
+
+
+def test_assigning_positions_names_them():
+    lat = _core.FfdLattice(3, flat_rest(3, 1.0, 1.0, 0.1))
+    for bad in ("x", None, {"a": 1}, np.zeros((18, 3)) + 1j, np.zeros((18, 3), bool)):
+        with pytest.raises(TypeError, match="positions"):
+            lat.positions = bad  # was pybind's 'incompatible function arguments' naming no one
+    for bad in (np.nan, np.zeros((18, 2)), np.full((18, 3), np.inf)):
+        with pytest.raises(ValueError, match="positions"):
+            lat.positions = bad
+    lat.positions = np.asfortranarray(lat.rest + 1.0)
+    np.testing.assert_array_equal(lat.positions, lat.rest + 1.0)
+    lat.positions = np.zeros((18, 3), dtype=np.int32)
+    assert np.all(lat.positions == 0.0)

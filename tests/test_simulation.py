@@ -294,3 +294,241 @@ def test_cells_near_refuses_a_point_off_the_sheet(square):
     sim = thinburn.Simulation(*square, cells=16, shell=False)
     with pytest.raises(ValueError, match="point"):
         sim.cells_near((5.0, 5.0, 5.0))
+
+
+# --- the error contract of the model's keywords (repro r6) -----------------------------------
+
+from thinburn.simulation import (BENDING_KEYS, DYNAMICS_KEYS, MAX_COORDINATE, MAX_LATTICE,  # noqa: E402
+                                 MAX_WIND, MIN_EXTENT, PARTICLE_KEYS, PARTICLE_PREFIX)
+
+FIRE_KEYS = ("cv", "v_floor", "speed_noise", "duration_noise", "climb", "wind_spread", "max_drive",
+             "ash_fraction", "ash_strength")
+BOOL_KEYS = {"heat_fast", "sleeping", "crumple_momentum", "bimetal"}
+INT_KEYS = {"substeps", "max_substeps", "cg_max_iterations", "ldlt_max_vertices", "refactor_iterations",
+            "wake_hold", "particle_capacity"}
+CHOICE_KEYS = {"preconditioner"}
+VECTOR_KEYS = {"gravity"}
+ALL_KEYS = FIRE_KEYS + DYNAMICS_KEYS + BENDING_KEYS + tuple(PARTICLE_PREFIX + k for k in PARTICLE_KEYS)
+REAL_KEYS = [k for k in ALL_KEYS if k not in BOOL_KEYS | INT_KEYS | CHOICE_KEYS | VECTOR_KEYS]
+
+
+@pytest.fixture(scope="module")
+def small():
+    return rect_sheet(0.21, 0.297, nx=6, ny=8)
+
+
+def _raises_named(exc, key, fn):
+    with pytest.raises(exc) as info:
+        fn()
+    assert key in str(info.value), (key, str(info.value))
+    assert "Unable to cast" not in str(info.value)
+
+
+@pytest.mark.parametrize("key", ALL_KEYS)
+def test_every_model_keyword_refuses_text_and_none_by_name(small, key):
+    for bad in (None, {"a": 1}, 1 + 2j) + (() if key in CHOICE_KEYS else ("x",)):
+        _raises_named(TypeError, key, lambda: thinburn.Simulation(*small, cells=8, **{key: bad}))
+    if key in CHOICE_KEYS:
+        _raises_named(ValueError, key, lambda: thinburn.Simulation(*small, cells=8, **{key: "x"}))
+
+
+@pytest.mark.parametrize("key", REAL_KEYS)
+def test_real_keywords_refuse_bools_nan_inf_and_sequences(small, key):
+    for bad in (True, np.bool_(False), [1.0, 2.0]):
+        _raises_named(TypeError, key, lambda: thinburn.Simulation(*small, cells=8, **{key: bad}))
+    for bad in (np.nan, np.inf, -np.inf, 10**400):
+        _raises_named(ValueError, key, lambda: thinburn.Simulation(*small, cells=8, **{key: bad}))
+
+
+@pytest.mark.parametrize("key", sorted(INT_KEYS))
+def test_int_keywords_refuse_floats_and_c_int_overflow(small, key):
+    for bad in (1.5, 2.0, True, np.float64(3.0)):
+        _raises_named(TypeError, key, lambda: thinburn.Simulation(*small, cells=8, **{key: bad}))
+    for bad in (2**31, 2**40, -2**31 - 1, 2**64, 10**30):
+        _raises_named(ValueError, key, lambda: thinburn.Simulation(*small, cells=8, **{key: bad}))
+
+
+@pytest.mark.parametrize("key", sorted(BOOL_KEYS))
+def test_bool_keywords_take_python_and_numpy_bools_only(small, key):
+    for bad in (1, 0.0, "yes", np.int64(1)):
+        _raises_named(TypeError, key, lambda: thinburn.Simulation(*small, cells=8, **{key: bad}))
+    for good in (False, np.bool_(True)):
+        thinburn.Simulation(*small, cells=8, **{key: good})
+
+
+def test_gravity_needs_three_finite_components(small):
+    for bad in (9.81, "down", None, np.float64(9.81)):  # r6: a scalar gave RuntimeError
+        _raises_named(TypeError, "gravity", lambda: thinburn.Simulation(*small, cells=8, gravity=bad))
+    for bad in ((0, 0), (0, 0, -9.8, 0), (0, np.nan, -9.8), (0, "0", -9.8), (0, 0, np.inf)):
+        with pytest.raises((ValueError, TypeError), match="gravity"):
+            thinburn.Simulation(*small, cells=8, gravity=bad)
+    sim = thinburn.Simulation(*small, cells=8, gravity=np.array([0.0, 0.0, -1.62]))
+    assert sim.params.dynamics["gravity"] == (0.0, 0.0, -1.62)
+
+
+def test_numpy_scalars_are_accepted_where_python_ones_are(small):
+    sim = thinburn.Simulation(*small, cells=np.int64(8), seed=np.uint32(3), lattice=np.int16(5),
+                              substeps=np.int64(2), particle_capacity=np.int32(500),
+                              cv=np.float32(0.25), ct=np.float64(1e-3), heat_fast=np.bool_(False),
+                              k_thickness=np.int64(1))
+    assert sim.cells == 8 and sim.lattice_size == 5
+    assert sim.params.dynamics["substeps"] == 2 and sim.params.particles["capacity"] == 500
+    assert sim.params.cv == 0.25 and sim.params.bending["heat_fast"] is False
+    sim.set_dynamics(substeps=np.int8(3), buoyancy=np.float32(0.5))
+    sim.ignite((0.1, 0.1, 0.0))
+    sim.step(np.float32(0.04))
+    assert np.all(np.isfinite(sim.vertex_positions()))
+
+
+def test_substep_counts_have_ceilings(small):
+    thinburn.Simulation(*small, cells=8, substeps=10000, max_substeps=1000000)
+    with pytest.raises(ValueError, match=r"substeps must be in \[0, 10000\].*max_substeps"):
+        thinburn.Simulation(*small, cells=8, substeps=10001)
+    with pytest.raises(ValueError, match=r"max_substeps must be in \[1, 1000000\].*implicit"):
+        thinburn.Simulation(*small, cells=8, max_substeps=1000001)
+    sim = thinburn.Simulation(*small, cells=8)
+    with pytest.raises(ValueError, match="max_substeps"):
+        sim.set_dynamics(max_substeps=2**40)  # r6: RuntimeError "Unable to cast"
+    assert sim.params.dynamics["max_substeps"] == 10000
+
+
+def test_lattice_has_a_ceiling_that_says_what_to_use(small):
+    assert MAX_LATTICE == 129
+    with pytest.raises(ValueError, match=r"lattice must be <= 129.*lattice=None"):
+        thinburn.Simulation(*small, cells=8, lattice=130)
+    with pytest.raises(ValueError, match="lattice"):
+        thinburn.Simulation(*small, cells=8, lattice=257)
+    with pytest.raises(TypeError, match="lattice"):
+        thinburn.Simulation(*small, cells=8, lattice=5.0)
+    with pytest.raises(ValueError, match="lattice"):
+        thinburn.Simulation(*small, cells=8, lattice=1)
+
+
+def test_set_dynamics_names_the_key_for_every_wrong_type(small):
+    sim = thinburn.Simulation(*small, cells=8)
+    before = sim.params.dynamics
+    cases = [("gravity", 9.8, TypeError), ("substeps", 1.5, TypeError), ("sleeping", 1, TypeError),
+             ("buoyancy", "up", TypeError), ("buoyancy", np.nan, ValueError),
+             ("cg_max_iterations", 2**31, ValueError), ("preconditioner", 3, TypeError),
+             ("preconditioner", "magic", ValueError), ("integrator", None, TypeError),
+             ("wind_drag", True, TypeError), ("safety", 2.0, ValueError)]
+    for key, bad, exc in cases:
+        _raises_named(exc, key, lambda: sim.set_dynamics(**{key: bad}))
+    assert sim.params.dynamics == before
+
+
+def test_material_fields_are_checked_by_name(small):
+    paper = thinburn.MATERIALS["paper"]
+    _raises_named(TypeError, "material.V0", lambda: thinburn.Simulation(*small, material=paper.with_(V0="3.5")))
+    _raises_named(TypeError, "material.alpha", lambda: thinburn.Simulation(*small, material=paper.with_(alpha=None)))
+    _raises_named(TypeError, "material.mass", lambda: thinburn.Simulation(*small, material=paper.with_(mass=True)))
+    _raises_named(ValueError, "material.Cp", lambda: thinburn.Simulation(*small, material=paper.with_(Cp=np.nan)))
+
+
+def test_wind_has_a_ceiling(small):
+    sim = thinburn.Simulation(*small, cells=8)
+    assert MAX_WIND == 1e3
+    sim.wind = (MAX_WIND, 0.0, 0.0)
+    for bad in ((1e150, 0, 0), (0, 0, -1001.0)):  # r6: 1e150 failed in a step naming 'normal'
+        with pytest.raises(ValueError, match="wind"):
+            sim.wind = bad
+    assert sim.wind[0] == MAX_WIND
+
+
+# --- coordinates the model can take (repro r6: 1e20 / 1e150 failed only in a step) -----------
+
+def test_coordinates_beyond_the_limit_are_refused_at_construction(small):
+    v, f = small
+    assert MAX_COORDINATE == 1e6
+    at = v.copy()
+    at[:, 0] += MAX_COORDINATE - at[:, 0].max()  # the farthest vertex exactly at the limit
+    sim = thinburn.Simulation(at, f, cells=8)
+    sim.ignite(at[0])
+    sim.step(0.04)
+    assert np.all(np.isfinite(sim.vertex_positions()))
+    beyond = at.copy()
+    beyond[:, 0] += 1.0
+    for bad in (beyond, -beyond, v * 1e20, v * 1e150):
+        with pytest.raises(ValueError, match=r"vertices: coordinates up to .* <= 1e\+06 m"):
+            thinburn.Simulation(bad, f, cells=8)
+
+
+def test_a_sheet_too_small_to_simulate_is_refused(small):
+    v, f = small
+    assert MIN_EXTENT == 1e-6
+    extent = (v.max(axis=0) - v.min(axis=0)).max()
+    ok = v * (MIN_EXTENT / extent)
+    sim = thinburn.Simulation(ok, f, cells=8)
+    for _ in range(3):
+        sim.step(0.04)
+    # a free fall of 0.12 s, slowed a little by the air: as measured at this size
+    dz = (sim.vertex_positions() - ok)[:, 2]
+    assert np.all(np.isfinite(dz)) and -0.0706 < dz.max() < -0.03
+    with pytest.raises(ValueError, match=r"vertices: the sheet spans only .*scale the scene up"):
+        thinburn.Simulation(ok * 0.99, f, cells=8)
+    with pytest.raises(ValueError, match="vertices"):
+        thinburn.Simulation(v * 1e-9, f, cells=8)  # measured: its fall blew up to 4e20 m
+
+
+# --- pinned (repro r7) ------------------------------------------------------------------------
+
+def test_pinned_accepts_masks_index_arrays_and_the_empty_list():
+    v, f = rect_sheet(1.0, 1.4, nx=6, ny=8, vertical=True, z=0.05)
+    n = len(v)
+    top = np.isclose(v[:, 2], v[:, 2].max())
+    idx = np.flatnonzero(top)
+
+    def held(pins):
+        sim = thinburn.Simulation(v, f, cells=8, pinned=pins)
+        for _ in range(6):
+            sim.step(1 / 24)
+        return np.abs(sim.vertex_positions() - v).max(axis=1)
+
+    moved_free = held(None)
+    assert moved_free.min() > 1e-3
+    for pins in (top, idx, list(idx), idx.astype(np.uint16), idx.astype(float)):
+        moved = held(pins)
+        assert np.all(moved[top] == 0.0) and moved[~top].min() > 0.0
+    for empty in ([], np.array([], dtype=np.int64), np.zeros(0), ()):
+        assert np.array_equal(held(empty), moved_free)
+    assert np.all(held(np.arange(n)) == 0.0)  # length n, but not only 0/1: indices
+
+
+def test_pinned_refuses_an_ambiguous_0_1_integer_array():
+    v, f = rect_sheet(1.0, 1.4, nx=6, ny=8, vertical=True, z=0.05)
+    top = np.isclose(v[:, 2], v[:, 2].max())
+    for ambiguous in (top.astype(np.uint8), top.astype(int), list(top.astype(int)), np.zeros(len(v), int)):
+        with pytest.raises(ValueError, match=r"pinned: .*ambiguous.*astype\(bool\).*flatnonzero"):
+            thinburn.Simulation(v, f, cells=8, pinned=ambiguous)
+    with pytest.raises(ValueError, match="pinned.*shape"):
+        thinburn.Simulation(v, f, cells=8, pinned=top[:-1])
+    with pytest.raises(TypeError, match="pinned"):
+        thinburn.Simulation(v, f, cells=8, pinned=["a", "b"])
+    with pytest.raises(TypeError, match="pinned"):
+        thinburn.Simulation(v, f, cells=8, pinned=np.array([0.5, 1.0]))
+
+
+def test_run_refuses_an_endless_loop_and_shell_takes_numpy_bools(small):
+    sim = thinburn.Simulation(*small, cells=8, shell=np.bool_(False))
+    assert not sim._sim.has_shell
+    for duration, dt in ((1e300, 1 / 24), (1.0, 1e-300), (1e7 + 1, 1.0)):
+        with pytest.raises(ValueError, match="duration.*steps"):
+            sim.run(duration, dt)
+    assert sim.time == 0.0
+    sim.run(0.5, dt=0.25)
+    assert sim.time == 0.5
+
+
+def test_odd_values_found_by_the_api_sweep_are_named(small):
+    v, f = small
+    with pytest.raises(ValueError, match="lattice"):
+        thinburn.Simulation(v, f, cells=8, lattice=2**70)  # was pybind's 'incompatible function arguments'
+    for bad in (np.array([-1e308]), np.array([1e300, 2.0])):  # was a RuntimeWarning from the int cast
+        with pytest.raises(ValueError, match="pinned.*out of range"):
+            thinburn.Simulation(v, f, cells=8, pinned=bad)
+    with pytest.raises(ValueError, match="faces.*out of range"):
+        thinburn.Simulation(v, np.full((2, 3), -1e308), cells=8)
+    sim = thinburn.Simulation(v, f, cells=8)
+    with pytest.raises(TypeError, match="callback"):
+        sim.run(0.1, 0.05, callback="print")
+    assert sim.time == 0.0

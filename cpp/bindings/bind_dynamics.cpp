@@ -6,6 +6,7 @@
 #include <string>
 
 #include "bindings.hpp"
+#include "convert.hpp"
 #include "block_ldlt.hpp"
 #include "crumple.hpp"
 #include "dynamics.hpp"
@@ -37,28 +38,10 @@ Preconditioner parse_preconditioner(const py::handle& h) {
   throw std::invalid_argument("preconditioner must be 'auto', 'ldlt' or 'jacobi', got '" + s + "'");
 }
 
-double as_double(const std::string& key, const py::handle& h) {
-  if (py::isinstance<py::bool_>(h) || !(py::isinstance<py::float_>(h) || py::isinstance<py::int_>(h) ||
-                                        py::hasattr(h, "__float__")))
-    throw py::type_error(key + " must be a number");
-  return h.cast<double>();
-}
-
-bool as_bool(const std::string& key, const py::handle& h) {
-  if (!py::isinstance<py::bool_>(h)) throw py::type_error(key + " must be a bool");
-  return h.cast<bool>();
-}
-
-int as_int(const std::string& key, const py::handle& h) {
-  if (py::isinstance<py::bool_>(h) || !py::isinstance<py::int_>(h))
-    throw py::type_error(key + " must be an int");
-  return h.cast<int>();
-}
-
 // Apply keyword arguments to p; unknown names raise TypeError naming them.
 void apply_kwargs(DynamicsParams& p, const py::kwargs& kw) {
   for (const auto& item : kw) {
-    const std::string k = item.first.cast<std::string>();
+    const std::string k = key_name(item.first);
     const py::handle v = item.second;
     double* dfield = k == "k_structure"      ? &p.k_structure
                      : k == "k_shear"        ? &p.k_shear
@@ -90,20 +73,18 @@ void apply_kwargs(DynamicsParams& p, const py::kwargs& kw) {
                   : k == "wake_hold" ? &p.wake_hold
                                              : nullptr;
     if (dfield)
-      *dfield = as_double(k, v);
+      *dfield = to_double(k, v);
     else if (bfield)
-      *bfield = as_bool(k, v);
+      *bfield = to_bool(k, v);
     else if (ifield)
-      *ifield = as_int(k, v);
+      *ifield = to_int(k, v);
     else if (k == "integrator")
       p.integrator = parse_integrator(v);
     else if (k == "preconditioner")
       p.preconditioner = parse_preconditioner(v);
-    else if (k == "gravity") {
-      const auto g = v.cast<std::vector<double>>();
-      if (g.size() != 3) throw std::invalid_argument("gravity must have 3 components");
-      p.gravity = Eigen::Vector3d(g[0], g[1], g[2]);
-    } else
+    else if (k == "gravity")
+      p.gravity = to_vector3(k, v);
+    else
       throw py::type_error("unexpected keyword argument '" + k + "'");
   }
   validate(p);
@@ -252,8 +233,12 @@ void define_dynamics(py::module_& m) {
 
   m.def(
       "explicit_stability_limit",
-      [](const py::handle& integ, double omega, double c) {
-        return explicit_stability_limit(parse_integrator(integ), omega, c);
+      [](const py::handle& integ, const py::handle& omega, const py::handle& c) {
+        const Integrator i = parse_integrator(integ);
+        const double w = to_double("omega", omega), damping = to_double("c", c);
+        if (w < 0.0) throw py::value_error("omega must be >= 0");
+        if (damping < 0.0) throw py::value_error("c must be >= 0");
+        return explicit_stability_limit(i, w, damping);
       },
       "integrator"_a, "omega"_a, "c"_a = 0.0,
       "Largest stable substep of an explicit integrator on modes up to omega with damping c.");

@@ -90,10 +90,22 @@ void define_lattice(py::module_& m) {
           "transpose of the interpolation).")
       .def_property(
           "positions", [](const FfdLattice& self) { return RowMatX3(self.positions()); },
-          [](FfdLattice& self, const RowMatX3& x) {
-            if (x.rows() != self.size() || !x.allFinite())
-              throw std::invalid_argument("positions must be finite with shape (" +
-                                          std::to_string(self.size()) + ", 3)");
+          [](FfdLattice& self, const py::object& obj) {
+            using Array = py::array_t<double, py::array::c_style | py::array::forcecast>;
+            py::array raw = py::array::ensure(obj);  // as it is: its dtype decides
+            const char kind = raw ? raw.dtype().kind() : 'O';
+            const bool real = kind == 'f' || kind == 'i' || kind == 'u';
+            if (!raw) PyErr_Clear();
+            Array a = real ? Array::ensure(raw) : Array();
+            if (!real || !a) {
+              PyErr_Clear();
+              throw py::type_error("positions must be an array of real numbers, shape (" +
+                                   std::to_string(self.size()) + ", 3)");
+            }
+            if (a.ndim() != 2 || a.shape(0) != self.size() || a.shape(1) != 3)
+              throw py::value_error("positions must have shape (" + std::to_string(self.size()) + ", 3)");
+            const RowMatX3 x = Eigen::Map<const RowMatX3>(a.data(), a.shape(0), 3);
+            if (!x.allFinite()) throw py::value_error("positions must be finite");
             self.positions() = x;
           },
           "Current control positions ((2 M^2) x 3), a copy; assign to set. A LatticeDynamics "
@@ -102,7 +114,16 @@ void define_lattice(py::module_& m) {
                              "Rest control positions ((2 M^2) x 3).")
       .def_property_readonly("M", &FfdLattice::M, "Couples per side.")
       .def_property_readonly("size", &FfdLattice::size, "Number of control vertices, 2 M^2.")
-      .def("index", &FfdLattice::index, "i"_a, "j"_a, "k"_a, "Index of control vertex (i, j, k).");
+      .def(
+          "index",
+          [](const FfdLattice& self, int i, int j, int k) {
+            const int M = self.M();
+            if (i < 0 || i >= M) throw py::value_error("i must be in [0, M) = [0, " + std::to_string(M) + ")");
+            if (j < 0 || j >= M) throw py::value_error("j must be in [0, M) = [0, " + std::to_string(M) + ")");
+            if (k != 0 && k != 1) throw py::value_error("k must be 0 (bottom) or 1 (top)");
+            return self.index(i, j, k);
+          },
+          "i"_a, "j"_a, "k"_a, "Index of control vertex (i, j, k).");
 }
 
 }  // namespace thinburn::bind

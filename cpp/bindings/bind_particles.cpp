@@ -2,6 +2,7 @@
 #include <pybind11/stl.h>
 
 #include "bindings.hpp"
+#include "convert.hpp"
 #include "particles.hpp"
 
 namespace py = pybind11;
@@ -50,7 +51,7 @@ py::dict params_dict(const ParticleParams& p) {
 
 void apply_particle_kwargs(ParticleParams& p, const py::dict& kw) {
   for (const auto& item : kw) {
-    const std::string k = item.first.cast<std::string>();
+    const std::string k = key_name(item.first);
     double* d = k == "birth_rate"        ? &p.birth_rate
                 : k == "temperature0"    ? &p.temperature0
                 : k == "cooling"         ? &p.cooling
@@ -63,9 +64,9 @@ void apply_particle_kwargs(ParticleParams& p, const py::dict& kw) {
                 : k == "vertical_band"   ? &p.vertical_band
                                          : nullptr;
     if (d)
-      *d = item.second.cast<double>();
+      *d = to_double(k, item.second);
     else if (k == "capacity")
-      p.capacity = item.second.cast<int>();
+      p.capacity = to_int(k, item.second, 1, 100000000);
     else
       throw py::type_error("unexpected particle parameter '" + k + "'");
   }

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "bindings.hpp"
+#include "convert.hpp"
 #include "simulation.hpp"
 #include "threads.hpp"
 
@@ -88,14 +89,14 @@ void define_params(py::module_& m) {
 
 void apply_bending_kwargs(BendingParams& b, const py::dict& kw) {
   for (const auto& item : kw) {
-    const std::string k = item.first.cast<std::string>();
+    const std::string k = key_name(item.first);
     double* d = k == "ct" ? &b.ct : k == "cp" ? &b.cp : k == "alpha" ? &b.alpha : k == "beta" ? &b.beta
               : k == "d_min" ? &b.d_min : k == "heat_tolerance" ? &b.tolerance
               : k == "max_rotation" ? &b.max_rotation : nullptr;
     if (d)
-      *d = item.second.cast<double>();
+      *d = to_double(k, item.second);
     else if (k == "heat_fast")
-      b.fast = item.second.cast<bool>();
+      b.fast = to_bool(k, item.second);
     else
       throw py::type_error("unexpected bending parameter '" + k + "'");
   }

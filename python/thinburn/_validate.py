@@ -39,6 +39,8 @@ def index_array(value, name: str, shape: tuple, upper: int) -> np.ndarray:
     if a.dtype == object:
         raise TypeError(f"{name} must be an array of integers, got objects")
     if a.dtype.kind == "f" and a.size and np.all(np.isfinite(a)) and np.all(a == np.round(a)):
+        if np.abs(a).max() >= 2.0**62:  # would not cast to int64
+            raise ValueError(f"{name} has indices out of range [0, {upper}): min {a.min():g}, max {a.max():g}")
         a = a.astype(np.int64)
     _check_kind(a, name, "iu")
     if a.ndim != len(shape) or any(s != -1 and s != n for s, n in zip(shape, a.shape)):
@@ -53,7 +55,10 @@ def real(value, name: str, *, low=None, high=None, low_open=False, high_open=Fal
     """A finite float within bounds."""
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise TypeError(f"{name} must be a real number, got {type(value).__name__}")
-    v = float(value)
+    try:
+        v = float(value)
+    except OverflowError:
+        raise ValueError(f"{name} must be finite, got an int too large for a float") from None
     if not np.isfinite(v):
         raise ValueError(f"{name} must be finite, got {v}")
     if low is not None and (v < low or (low_open and v == low)):

@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import _core
+from . import _validate as V
 from .materials import MATERIALS
 
 LatticeDynamics = _core.LatticeDynamics
@@ -30,6 +31,8 @@ PRESETS = {
 
 def preset(name: str, **overrides) -> dict:
     """Keyword arguments for LatticeDynamics from a Table 1 preset, with overrides."""
+    if not isinstance(name, str):
+        raise TypeError(f"name must be a str, one of {sorted(PRESETS)}, got {type(name).__name__}")
     if name not in PRESETS:
         raise ValueError(f"name must be one of {sorted(PRESETS)}, got {name!r}")
     return {**PRESETS[name], **overrides}
@@ -41,8 +44,8 @@ def vertex_masses(M: int, area: float, areal_density: float) -> np.ndarray:
     carry half, corners a quarter, split evenly between top and bottom."""
     if isinstance(M, bool) or not isinstance(M, (int, np.integer)) or M < 2:
         raise ValueError(f"M must be an int >= 2, got {M!r}")
-    if not (area > 0 and areal_density > 0):
-        raise ValueError(f"area and areal_density must be > 0, got {area}, {areal_density}")
+    area = V.real(area, "area", low=0.0, low_open=True)
+    areal_density = V.real(areal_density, "areal_density", low=0.0, low_open=True)
     w = np.ones(M)
     w[[0, -1]] = 0.5
     share = np.outer(w, w) / (M - 1) ** 2

@@ -59,7 +59,10 @@ def _real(name: str, v, *, low=None, high=None, low_open=False, high_open=False)
     """A finite real scalar within [low, high] (open ends as asked), or ValueError/TypeError."""
     if isinstance(v, bool) or not isinstance(v, numbers.Real):
         raise TypeError(f"{name} must be a real number, got {type(v).__name__}")
-    x = float(v)
+    try:
+        x = float(v)
+    except OverflowError:
+        raise ValueError(f"{name} must be finite, got an int too large for a float") from None
     if not np.isfinite(x):
         raise ValueError(f"{name} must be finite, got {x}")
     if low is not None and (x <= low if low_open else x < low):

@@ -8,6 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import _core
+from . import _validate as V
 
 FfdLattice = _core.FfdLattice
 Embedding = _core.Embedding
@@ -26,14 +27,13 @@ def drape(mid: np.ndarray, normals: np.ndarray, thickness: float) -> np.ndarray:
     mid, normals: (M, M, 3) arrays (normals need not be unit; they are normalised).
     Returns the (2 M^2) x 3 rest positions.
     """
-    mid = np.asarray(mid, dtype=np.float64)
-    normals = np.asarray(normals, dtype=np.float64)
+    mid = V.real_array(mid, "mid", (-1, -1, 3), finite=False)
+    normals = V.real_array(normals, "normals", (-1, -1, 3), finite=False)
     if mid.ndim != 3 or mid.shape[0] != mid.shape[1] or mid.shape[2] != 3 or mid.shape[0] < 2:
         raise ValueError(f"mid must have shape (M, M, 3) with M >= 2, got {mid.shape}")
     if normals.shape != mid.shape:
         raise ValueError(f"normals must have shape {mid.shape}, got {normals.shape}")
-    if not (np.isfinite(thickness) and thickness > 0):
-        raise ValueError(f"thickness must be finite and > 0, got {thickness}")
+    thickness = V.real(thickness, "thickness", low=0.0, low_open=True)
     length = np.linalg.norm(normals, axis=2, keepdims=True)
     if not np.all(length > 0) or not np.all(np.isfinite(mid)):
         raise ValueError("normals must be non-zero and mid finite")
@@ -51,8 +51,9 @@ def flat_rest(M: int, width: float, height: float, thickness: float,
     j), v along y (rows i), its corner couple (0, 0) at origin, top layer at +z."""
     if isinstance(M, bool) or not isinstance(M, (int, np.integer)) or M < 2:
         raise ValueError(f"M must be an int >= 2, got {M!r}")
-    if not (width > 0 and height > 0):
-        raise ValueError(f"width and height must be > 0, got {width}, {height}")
+    width = V.real(width, "width", low=0.0, low_open=True)
+    height = V.real(height, "height", low=0.0, low_open=True)
+    origin = V.vector3(origin, "origin")
     t = np.linspace(0.0, 1.0, M)
     mid = np.zeros((M, M, 3))
     mid[:, :, 0] = origin[0] + width * t[None, :]

@@ -78,9 +78,29 @@ MATERIAL_FIELDS = tuple(f.name for f in fields(Material) if f.name != "name")
 def resolve_material(material) -> Material:
     """A Material from a preset name or a Material; bad input names the argument."""
     if isinstance(material, Material):
+        _check_fields(material)
         return material
     if isinstance(material, str):
         if material not in MATERIALS:
             raise ValueError(f"material: unknown preset {material!r}; choose one of {sorted(MATERIALS)}")
         return MATERIALS[material]
     raise TypeError(f"material must be a preset name or a thinburn.Material, got {type(material).__name__}")
+
+
+def _check_fields(m: Material) -> None:
+    """Every numeric field of a Material is a finite real number (bounds are checked where the
+    field is used); a TypeError/ValueError names the field as ``material.FIELD``."""
+    import math
+    import numbers
+    if not isinstance(m.name, str):
+        raise TypeError(f"material.name must be a str, got {type(m.name).__name__}")
+    if isinstance(m.figure, bool) or not isinstance(m.figure, numbers.Integral):
+        raise TypeError(f"material.figure must be an int, got {type(m.figure).__name__}")
+    for f in fields(Material):
+        if f.name in ("name", "figure"):
+            continue
+        value = getattr(m, f.name)
+        if isinstance(value, bool) or not isinstance(value, numbers.Real) or type(value).__name__ == "bool_":
+            raise TypeError(f"material.{f.name} must be a real number, got {type(value).__name__}")
+        if not math.isfinite(float(value)):
+            raise ValueError(f"material.{f.name} must be finite, got {value}")

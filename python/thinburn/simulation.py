@@ -13,6 +13,22 @@ from .materials import Material, resolve_material
 FRONT_METHODS = ("cellular", "cellular16", "fmm1", "fmm")
 
 INTEGRATORS = ("implicit", "symplectic", "explicit")
+
+# Coordinates the model can take (r6, measured): offsets up to 1e6 m keep the motion within
+# 1e-8 m of the same sheet at the origin (1e8 m: 3e-7 m, 1e10 m: 5e-5 m); a sheet smaller than
+# about 1e-7 m moves wrongly (its lattice's free fall stalls, at 1e-9 m it blows up).
+MAX_COORDINATE = 1e6  # m, largest |x|, |y| or |z| of a vertex
+MIN_EXTENT = 1e-6     # m, smallest allowed largest side of the sheet's bounding box
+# The largest lattice: a step costs ~M^2 (measured, one core, an A4 sheet at 128 cells, fire
+# started: M = 33 0.3 s a step, 65 about 2 s, 129 about 10 s, 257 over 40 s); the default
+# lattice never exceeds 65.
+MAX_LATTICE = 129
+# Wind, m/s: 1e10 still gives finite results, 1e150 fails inside a step (particle normals
+# overflow) and 1e300 silently does nothing; no real wind comes near 1000 m/s.
+MAX_WIND = 1e3
+# Simulation.run: duration / dt beyond this many steps (hours even at a millisecond a step)
+# is refused rather than looping for ever (run(1e300) did).
+MAX_RUN_STEPS = 10_000_000
 CRUMPLE_REFERENCE_K = 0.05  # Table 1's K_structure for paper: its crumple gain is 1
 
 # Keyword overrides of the shell's parts, passed on to the core's parameter groups (which
@@ -46,7 +62,9 @@ class Simulation:
 
     Parameters
     ----------
-    vertices : (n, 3) float array, metres; world up is +z, gravity along -z.
+    vertices : (n, 3) float array, metres; world up is +z, gravity along -z. Every coordinate
+        must lie within ±``MAX_COORDINATE`` (1e6 m) and the sheet's bounding box must be at
+        least ``MIN_EXTENT`` (1e-6 m) along its longest side (ValueError naming ``vertices``).
     faces : (m, 3) int array of vertex indices (triangles).
     uv : optional (n, 2) float array; the rest parameterisation. Without it the mesh is
         projected on its best-fit plane.
@@ -57,15 +75,21 @@ class Simulation:
     front : fire-front method, one of ``FRONT_METHODS``: "fmm" (second-order fast marching,
         the default, converges), "fmm1", "cellular" (the paper's 8-neighbour rule) or
         "cellular16".
-    lattice : M, the FFD lattice has M×M couples (None: chosen from the sheet's size and
-        ``cells``, see docs/lattice.md).
-    pinned : None, a boolean mask (n,) or an index array of input vertices held in place.
+    lattice : M, the FFD lattice has M×M couples, 2 <= M <= ``MAX_LATTICE`` (129; None: chosen
+        from the sheet's size and ``cells``, at most 65, see docs/lattice.md).
+    pinned : input vertices held in place: None, a bool mask of length n, or an integer index
+        array of any length (``[]`` pins nothing). An integer array of length n holding only
+        0 and 1 is ambiguous (mask or indices?) and raises ValueError: pass ``mask.astype(bool)``
+        or ``np.flatnonzero(mask)``.
     floor : None or the height (m) of a horizontal floor with friction under the sheet.
     integrator : "implicit" (backward Euler, the default), "symplectic" or "explicit" (the
         paper's eqs 13-15); explicit ones substep as stability needs or raise.
     shell : False switches the paper's §4 off: no lattice, particles or motion; the sheet keeps
         its rest shape and only the fire runs.
-    **params : overrides of the model's scalars:
+    **params : overrides of the model's scalars. A wrong type (text, a float where an int is
+        due, a bool where a number is, a scalar for ``gravity``'s 3 components) raises
+        TypeError, a bad value (NaN, inf, out of range, an int beyond a C int) ValueError; both
+        name the keyword. Numpy scalars are accepted where Python ones are.
 
         * the fire: ``cv``, ``v_floor``, ``speed_noise``, ``duration_noise``, ``climb``
           (flames climb: drive toward world-up, 0 = the paper's symmetric law),
@@ -78,7 +102,9 @@ class Simulation:
           ``wind_drag``, ``friction``, ``crumple_gain``, ``plasticity``, ``crumple_momentum``,
           ``bimetal`` (default True: D shrinks the heated face's springs, docs/dynamics.md §2;
           False: the paper's prescribed chord motion), ``sleep_speed``,
-          ``sleeping``, ``substeps``, ``max_substeps``, ``safety``, ``max_stretch``,
+          ``sleeping``, ``substeps`` (0, the default, chooses them per step; a fixed count is
+          at most 10000, each one costs a sweep of the lattice), ``max_substeps`` (10000,
+          at most 1e6: an explicit step that needs more raises), ``safety``, ``max_stretch``,
           ``cg_tolerance``, ``cg_max_iterations``, ``gravity``, ``preconditioner`` of the implicit
           solve's conjugate gradients ("auto", the default: a sparse block LDL^T factorization, kept
           while it stays good, up to ``ldlt_max_vertices`` (600) awake lattice vertices, couple-block
@@ -97,6 +123,7 @@ class Simulation:
         verts = V.real_array(vertices, "vertices", (-1, 3))
         if len(verts) < 3:
             raise ValueError(f"vertices: an empty mesh (need >= 3 vertices, got {len(verts)})")
+        _check_scale(verts)
         tris = V.index_array(faces, "faces", (-1, 3), len(verts))
         if len(tris) == 0:
             raise ValueError("faces: an empty mesh (no triangles)")
@@ -106,11 +133,17 @@ class Simulation:
         p = self._params(self.material, V.integer(cells, "cells", low=2, high=4096),
                          V.integer(seed, "seed", low=0, high=2**63 - 1),
                          V.choice(front, "front", FRONT_METHODS), params)
-        if not isinstance(shell, bool):
+        if not isinstance(shell, (bool, np.bool_)):
             raise TypeError(f"shell must be a bool, got {type(shell).__name__}")
-        p.shell = shell
+        p.shell = bool(shell)
         if lattice is not None:
-            p.lattice = V.integer(lattice, "lattice", low=2, high=257)
+            m = V.integer(lattice, "lattice", low=2)
+            if m > MAX_LATTICE:
+                raise ValueError(f"lattice must be <= {MAX_LATTICE}, got {m}: a step's cost grows as "
+                                 "M^2 (one core, an A4 sheet at 128 cells: M = 65 about 2 s a step, M = 129 "
+                                 "about 10 s, M = 257 over 40 s); use lattice=None (chosen from the sheet, "
+                                 "at most 65) or a smaller M")
+            p.lattice = m
         if floor is not None:
             p.has_floor, p.floor_z = True, V.real(floor, "floor")
             if float(verts[:, 2].min()) < p.floor_z - 1e-9:
@@ -199,10 +232,17 @@ class Simulation:
         self._sim.step(d, self._threads)
 
     def run(self, duration, dt=1 / 24, callback=None) -> None:
-        """Step until `duration` more seconds have passed; callback(sim) after each step."""
+        """Step until `duration` more seconds have passed; callback(sim) after each step.
+        At most ``MAX_RUN_STEPS`` (1e7) steps: more raise ValueError naming ``duration``."""
         total = V.real(duration, "duration", low=0.0)
         d = V.real(dt, "dt", low=0.0, low_open=True)
-        steps = int(np.ceil(total / d - 1e-9))
+        if callback is not None and not callable(callback):
+            raise TypeError(f"callback must be callable or None, got {type(callback).__name__}")
+        steps = total / d
+        if steps > MAX_RUN_STEPS:
+            raise ValueError(f"duration: {total:g} s at dt = {d:g} s is {steps:.3g} steps, more than "
+                             f"{MAX_RUN_STEPS:.0e}; use a larger dt or a shorter duration")
+        steps = int(np.ceil(steps - 1e-9))
         for _ in range(steps):
             self.step(d)
             if callback is not None:
@@ -221,12 +261,16 @@ class Simulation:
 
     @property
     def wind(self) -> np.ndarray:
-        """Wind velocity (x, y, z) in m/s; may change between steps."""
+        """Wind velocity (x, y, z) in m/s, |wind| <= ``MAX_WIND`` (1000); may change between steps."""
         return np.array(self._sim.wind)
 
     @wind.setter
     def wind(self, value) -> None:
-        self._sim.wind = V.vector3(value, "wind")
+        w = V.vector3(value, "wind")
+        if float(np.linalg.norm(w)) > MAX_WIND:
+            raise ValueError(f"wind: |wind| = {np.linalg.norm(w):.3g} m/s exceeds {MAX_WIND:g} m/s "
+                             "(the model's drag and particles overflow far above it)")
+        self._sim.wind = w
 
     @property
     def threads(self) -> int:
@@ -454,6 +498,19 @@ class _Serialised:
             setattr(self._core, name, value)
 
 
+def _check_scale(verts: np.ndarray) -> None:
+    """Refuse coordinates the model cannot simulate, naming ``vertices`` (r6)."""
+    big = float(np.abs(verts).max())
+    if big > MAX_COORDINATE:
+        raise ValueError(f"vertices: coordinates up to {big:.3g} m; the model takes |x|, |y|, |z| <= "
+                         f"{MAX_COORDINATE:g} m (scene unit = 1 m): move the sheet near the origin "
+                         "or scale the scene down")
+    extent = float((verts.max(axis=0) - verts.min(axis=0)).max())
+    if extent < MIN_EXTENT:
+        raise ValueError(f"vertices: the sheet spans only {extent:.3g} m (too small or degenerate); "
+                         f"the model needs at least {MIN_EXTENT:g} m (scene unit = 1 m): scale the scene up")
+
+
 def _set_group(setter, prefix, values: dict) -> None:
     """Apply a parameter group; the core's errors get the user's name for the argument
     (``particle_`` keys are named with their prefix, material fields with ``material:``)."""
@@ -473,15 +530,33 @@ def _set_group(setter, prefix, values: dict) -> None:
 
 
 def _pinned_mask(pinned, n: int) -> np.ndarray:
-    """A uint8 flag per vertex from None, a boolean mask or an index array."""
+    """A uint8 flag per vertex from None, a boolean mask or an index array.
+
+    The rule (r7): a bool array is a mask and must have length n; an integer array (or a list,
+    or integral floats) is an index array of any length, the empty one included. An integer
+    array of length n holding only 0s and 1s is refused with a ValueError: it reads as a mask
+    as well as indices of vertices 0 and 1, so pass ``mask.astype(bool)`` or
+    ``np.flatnonzero(mask)`` instead.
+    """
     if pinned is None:
         return np.zeros(0, dtype=np.uint8)
-    a = np.asarray(pinned)
+    try:
+        a = np.asarray(pinned)
+    except Exception as exc:  # ragged lists and the like
+        raise TypeError(f"pinned must be None, a bool mask or an index array: {exc}") from None
     if a.dtype == bool:
         if a.shape != (n,):
             raise ValueError(f"pinned has invalid shape: a boolean mask needs ({n},), got {a.shape}")
         return a.astype(np.uint8)
+    if a.size == 0 and a.ndim == 1:  # [] or an empty array of any dtype: nothing pinned
+        if a.dtype.kind not in "iuf":
+            raise TypeError(f"pinned must be None, a bool mask or an index array, got dtype {a.dtype}")
+        return np.zeros(n, dtype=np.uint8)
     idx = V.index_array(a, "pinned", (-1,), n)
+    if len(idx) == n and n > 2 and np.all((idx == 0) | (idx == 1)):
+        raise ValueError(f"pinned: an integer array of length n = {n} holding only 0 and 1 is "
+                         "ambiguous (a 0/1 mask, or indices of vertices 0 and 1?); pass a bool "
+                         "mask (pinned.astype(bool)) or the indices (np.flatnonzero(pinned))")
     mask = np.zeros(n, dtype=np.uint8)
     mask[idx] = 1
     return mask
