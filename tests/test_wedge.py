@@ -86,6 +86,23 @@ def test_scene_file_igniter_times_follow_the_frames(tmp_path, capsys):
     assert 0.1 - 1e-9 <= ign[np.isfinite(ign)].min() < 0.2
 
 
+def test_wedge_usd_and_the_usd_command(tmp_path, capsys):
+    pytest.importorskip("pxr")
+    from pxr import Usd, UsdGeom
+    out = tmp_path / "w"
+    assert main(["wedge", *TINY, "--out", str(out), "--param", "seed=3", "--workers", "0", "--usd"]) == 0
+    folder = out / "seed-3"
+    assert (folder / "bake.usda").exists()
+    assert main(["usd", str(folder), "--out", str(tmp_path / "again.usdc")]) == 0
+    stage = Usd.Stage.Open(str(tmp_path / "again.usdc"))
+    mesh = UsdGeom.Mesh(stage.GetPrimAtPath("/ThinBurn/Sheet"))
+    with np.load(folder / "frames.npz") as d:
+        np.testing.assert_array_equal(np.array(mesh.GetPointsAttr().Get(Usd.TimeCode(4))),
+                                      d["vertex_positions"][4])
+    assert main(["usd", str(tmp_path / "nothing")]) == 2
+    assert "does not exist" in capsys.readouterr().err
+
+
 def test_wedges_on_a_local_cluster_failures_reruns_and_a_scheduler(tmp_path, capsys):
     distributed = pytest.importorskip("distributed")
     out = tmp_path / "wedges"
