@@ -110,9 +110,15 @@ class THINBURN_OT_export_scene(bpy.types.Operator):
         return {"RUNNING_MODAL"}
 
 
+def _menu(self, context):
+    self.layout.operator(THINBURN_OT_export_scene.bl_idname, text="ThinBurn Scene (.json, .npz)")
+
+
 def register():
     bpy.utils.register_class(THINBURN_OT_export_scene)
+    bpy.types.TOPBAR_MT_file_export.append(_menu)  # File > Export
 
 
 def unregister():
+    bpy.types.TOPBAR_MT_file_export.remove(_menu)
     bpy.utils.unregister_class(THINBURN_OT_export_scene)

@@ -123,9 +123,15 @@ class THINBURN_OT_export_usd(bpy.types.Operator):
         return {"RUNNING_MODAL"}
 
 
+def _menu(self, context):
+    self.layout.operator(THINBURN_OT_export_usd.bl_idname, text="ThinBurn Bake (.usda, .usdc)")
+
+
 def register():
     bpy.utils.register_class(THINBURN_OT_export_usd)
+    bpy.types.TOPBAR_MT_file_export.append(_menu)  # File > Export
 
 
 def unregister():
+    bpy.types.TOPBAR_MT_file_export.remove(_menu)
     bpy.utils.unregister_class(THINBURN_OT_export_usd)

@@ -104,6 +104,8 @@ def test_usd_export_of_a_baked_sheet(addon, tmp_path):
     make_igniter(sheet, (0.9, 1.9, 0.0), lit_from=1, radius=0.04)
     setup_bake(sheet, frames=10, cells=16, cache_dir=tmp_path / "cache")
     assert bpy.ops.thinburn.bake() == {"FINISHED"}
+    menu = {getattr(f, "__module__", "") for f in bpy.types.TOPBAR_MT_file_export._dyn_ui_initialize()}
+    assert {f"{addon.__name__}.usd_export", f"{addon.__name__}.scene_export"} <= menu  # File > Export
     path = str(tmp_path / "sheet.usda")
     assert bpy.ops.thinburn.export_usd(filepath=path) == {"FINISHED"}
     head, samples = addon.cache.read_pc2(tmp_path / "cache" / "Sheet.pc2")
@@ -156,3 +158,31 @@ def test_scene_export_bakes_outside_blender_as_the_addon_does(addon, tmp_path):
     out = []
     wedge.run_frames(sim, spec, fps, frames, lambda k, s: out.append(s.vertex_positions()))
     np.testing.assert_array_equal(np.asarray(out, dtype=np.float32), pc2)
+
+
+def test_a_bake_that_fails_midway_keeps_the_previous_cache_and_file(addon, tmp_path, monkeypatch):
+    import importlib
+    import io
+
+    import thinburn
+    headless = importlib.import_module(f"{addon.__name__}.headless")
+    shot = _shot(tmp_path)
+    assert headless.bake_file(shot, stream=io.StringIO()) == 0
+    cache = tmp_path / "cache"
+    pc2, stamp = _read(cache / "Sheet.pc2"), os.path.getmtime(shot)
+    real_step, calls = thinburn.Simulation.step, []
+
+    def failing_step(self, dt):
+        calls.append(dt)
+        if len(calls) == 5:
+            raise RuntimeError("the core gave up at step 5")
+        return real_step(self, dt)
+
+    monkeypatch.setattr(thinburn.Simulation, "step", failing_step)
+    log = io.StringIO()
+    assert headless.bake_file(shot, stream=log) == 1
+    text = log.getvalue()
+    assert "ThinBurn: error: 'Sheet': the simulation failed: RuntimeError: the core gave up at step 5" in text
+    assert "saved" not in text and os.path.getmtime(shot) == stamp
+    assert _read(cache / "Sheet.pc2") == pc2 and not (cache / "Sheet.pc2.partial").exists()
+    assert addon.operators.running_job(bpy.context.scene) is None
