@@ -89,13 +89,14 @@ def test_headless_module_main_parses_args_after_the_double_dash(addon, tmp_path,
     """blender -b shot.blend --python-expr "...; h.main()" -- --object Sheet --no-save"""
     _shot(tmp_path)
     monkeypatch.setattr(sys, "argv", ["blender", "-b", "shot.blend", "--python-expr", "x", "--",
-                                      "--object", "Sheet", "--no-save"])
+                                      "--object", "Sheet", "--no-save", "--usd", str(tmp_path / "usd")])
     import importlib
     headless = importlib.import_module(f"{addon.__name__}.headless")
     with pytest.raises(SystemExit) as stop:
         headless.main()
     assert stop.value.code == 0
     assert (tmp_path / "cache" / "Sheet.pc2").exists()
+    assert (tmp_path / "usd" / "Sheet.usda").exists()
 
 
 def test_usd_export_of_a_baked_sheet(addon, tmp_path):
