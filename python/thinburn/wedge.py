@@ -326,10 +326,12 @@ def _run_dask(todo, args, finished, workers, scheduler, log):
     try:
         if scheduler is not None:
             log(f"dask: scheduler {scheduler}, {len(client.scheduler_info()['workers'])} workers")
+        # The scene (the mesh) goes to every worker once, not with every task.
+        scene = client.scatter(args(todo[0])[0], broadcast=True, hash=False)
         futures = {}
         for w in todo:
-            fut = client.submit(bake_wedge, *args(w), key=f"thinburn-wedge-{w['key']}-{w['name']}",
-                                pure=False, retries=0)
+            fut = client.submit(bake_wedge, scene, *args(w)[1:],
+                                key=f"thinburn-wedge-{w['key']}-{w['name']}", pure=False, retries=0)
             futures[fut] = w
         for fut in as_completed(futures):
             w = futures[fut]
