@@ -122,11 +122,13 @@ class BakeJob:
         self._drain(block=False)
         return self.finished
 
-    def run(self) -> None:
-        """Bake to the end (background mode)."""
+    def run(self, progress=None) -> None:
+        """Bake to the end (background mode); ``progress(self)`` after each frame, if given."""
         while not self.finished:
             self._sample_ahead(_time.perf_counter() + 1.0)
             self._drain(block=True)
+            if progress is not None:
+                progress(self)
 
     def cancel(self) -> None:
         """Stop now; the previous bake (file, modifier, attributes) stays as it was."""

@@ -1,4 +1,4 @@
-"""Command line: `python -m thinburn demo [options]`."""
+"""Command line: `python -m thinburn demo|wedge|usd|bake [options]`."""
 from __future__ import annotations
 
 import argparse
@@ -23,6 +23,8 @@ def _parser() -> argparse.ArgumentParser:
     d.add_argument("--threads", type=int, default=None)
     d.add_argument("--out", default=None, help="output folder (default thinburn_out/demo_MATERIAL)")
     d.add_argument("--quiet", action="store_true", help="no progress bar")
+    from ._farm_cli import add_farm_commands
+    add_farm_commands(sub)
     return p
 
 
@@ -45,7 +47,9 @@ def main(argv=None) -> int:
               f"({s['simulated_frames_per_second']} simulated frames/s, drawing excluded); "
               f"{s['frames_written']} frames, "
               f"{100 * s['burnt_fraction']:.1f} % burnt -> {os.path.abspath(out)}")
-    return 0
+        return 0
+    from ._farm_cli import run_farm_command
+    return run_farm_command(args)
 
 
 if __name__ == "__main__":

@@ -175,6 +175,9 @@ def _write_outputs(out_dir, sim, store, particle_frames, images, scene, material
     # Particle counts differ per frame: one (k, 4) array [x, y, z, temperature] per frame.
     arrays.update({f"particles_{k:04d}": p for k, p in enumerate(particle_frames)})
     arrays["faces"] = scene.faces
+    # Per vertex, at the end (s; inf = never): the USD export's ignitionTime / burnoutTime.
+    arrays["vertex_ignition_times"] = sim.vertex_ignition_times()
+    arrays["vertex_burnout_times"] = sim.vertex_burnout_times()
     np.savez_compressed(os.path.join(out_dir, "frames.npz"), **arrays)
     burnt = float(np.mean(sim.cell_states()[sim.inside() == 1] == 2))
     summary = {
