@@ -20,6 +20,7 @@ namespace {
 using Vec3 = Eigen::Vector3d;
 using Face = std::array<int, 3>;
 constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr double kPi = 3.14159265358979323846;
 
 struct Mesh {
   std::vector<Vec3> v;
@@ -359,6 +360,28 @@ void lloyd_step(const Mesh& m, const Graph& g, const std::vector<int>& label, st
   }
 }
 
+// Angle deficit 2 pi - (sum of the corner angles) at each vertex; 0 on the boundary, where
+// the deficit measures the boundary's turning rather than the surface's curvature.
+std::vector<double> angle_deficits(const Mesh& m) {
+  const int n = static_cast<int>(m.v.size());
+  std::vector<double> angle(n, 0.0);
+  std::unordered_map<std::uint64_t, int> edge_count;
+  edge_count.reserve(m.f.size() * 2);
+  for (const Face& f : m.f)
+    for (int k = 0; k < 3; ++k) {
+      const int a = f[k], b = f[(k + 1) % 3], c = f[(k + 2) % 3];
+      const Vec3 u = m.v[b] - m.v[a], w = m.v[c] - m.v[a];
+      angle[a] += std::atan2(u.cross(w).norm(), u.dot(w));
+      ++edge_count[edge_key(a, b)];
+    }
+  std::vector<std::uint8_t> boundary(n, 0);
+  for (const auto& [key, count] : edge_count)
+    if (count == 1) boundary[key >> 32] = boundary[key & 0xffffffffu] = 1;
+  std::vector<double> out(n, 0.0);
+  for (int i = 0; i < n; ++i) out[i] = boundary[i] ? 0.0 : 2.0 * kPi - angle[i];
+  return out;
+}
+
 void csr(int n, const std::vector<std::pair<int, int>>& pairs, std::vector<int>* off, std::vector<int>* idx) {
   off->assign(n + 1, 0);
   for (const auto& p : pairs) ++(*off)[p.first + 1];
@@ -473,6 +496,10 @@ SurfaceCells::SurfaceCells(const SurfVerts& V, const SurfFaces& F, const CellOpt
   for (int i = 0; i < nc; ++i) pos_[i] = m.v[seeds[i]];
   area_.assign(nc, 0.0);
   for (int v = 0; v < n_dense_; ++v) area_[label[v]] += g.area[v];
+  gauss_.assign(nc, 0.0);
+  const std::vector<double> deficit = angle_deficits(m);
+  for (int v = 0; v < n_dense_; ++v) gauss_[label[v]] += deficit[v];
+  for (int i = 0; i < nc; ++i) gauss_[i] = area_[i] > 0.0 ? gauss_[i] / area_[i] : 0.0;
   std::vector<Vec3> nsum(nc, Vec3::Zero());
   std::vector<std::pair<int, int>> nbr_pairs;
   for (const Face& f : m.f) {

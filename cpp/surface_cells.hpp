@@ -72,6 +72,9 @@ class SurfaceCells {
   const std::vector<Eigen::Vector3d>& normals() const { return nrm_; }
   /// @brief Area of the cell's region (m^2); they sum to total_area().
   const std::vector<double>& areas() const { return area_; }
+  /// @brief Gaussian curvature of the cell's region (1/m^2): the angle deficits of the
+  /// dense mesh's interior vertices in the region over its area (discrete Gauss-Bonnet).
+  const std::vector<double>& gauss_curvature() const { return gauss_; }
   /// @brief Neighbours of cell c: nbr_index()[nbr_offset()[c] .. nbr_offset()[c+1]).
   const std::vector<int>& nbr_offset() const { return nbr_off_; }
   const std::vector<int>& nbr_index() const { return nbr_idx_; }
@@ -92,7 +95,7 @@ class SurfaceCells {
   double h_ = 0.0, area_total_ = 0.0;
   int n_dense_ = 0;
   std::vector<Eigen::Vector3d> pos_, nrm_;
-  std::vector<double> area_;
+  std::vector<double> area_, gauss_;
   std::vector<int> nbr_off_, nbr_idx_, fan_off_, fan_idx_;
   std::vector<std::array<int, 3>> tri_;
   std::vector<std::array<int, 3>> vcell_;

@@ -60,6 +60,7 @@ SurfaceFront::SurfaceFront(std::shared_ptr<const SurfaceCells> cells, const Surf
   tent_.assign(n, kInf);
   arrival_.assign(n, kInf);
   ts_.assign(n, kInf);
+  kappa_.assign(n, 0.0);
   w_.assign(n, Vec3::Zero());
   stamp_.assign(n, 0);
 }
@@ -82,6 +83,7 @@ void SurfaceFront::offer(int cell, const Candidate& c) {
   tent_[cell] = c.t;
   ts_[cell] = c.ts;
   w_[cell] = c.w;
+  kappa_[cell] = c.kappa;
   if (state_[cell] == 0) {
     state_[cell] = 1;
     ++n_trial_;
@@ -114,8 +116,14 @@ void SurfaceFront::ignite_point(const Vec3& p, double t0, const SurfaceSpeedFn& 
     const int q = flood_[i];
     if (state_[q] != 2) {
       const SurfaceSpeed s = speed(q);
-      const Vec3 w = onto_plane(sc.positions()[q] - src, sc.normals()[q]);
-      offer(q, Candidate{t0 + travel(s.v, s.e, w), t0, w});
+      // The chord to the source, lengthened to the arc it subtends: phi, the angle between
+      // the two normals, is the arc's turning (exact on spheres and across cylinders).
+      const Vec3 chord = sc.positions()[q] - src;
+      const double phi = std::acos(std::clamp(std::abs(sc.normals()[q].dot(nc)), 0.0, 1.0));
+      const double arc = phi > 1e-8 ? 0.5 * phi / std::sin(0.5 * phi) : 1.0;
+      const Vec3 w = onto_plane(chord, sc.normals()[q]) * arc;
+      const double len = w.norm();
+      offer(q, Candidate{t0 + travel(s.v, s.e, w), t0, w, len > 0.0 ? 1.0 / len : kInf});
     }
     for (int j = sc.nbr_offset()[q]; j < sc.nbr_offset()[q + 1]; ++j) {
       const int n = sc.nbr_index()[j];
@@ -151,7 +159,7 @@ void SurfaceFront::update_neighbours(int cell, const SurfaceSpeedFn& speed) {
     if (state_[x] == 2) continue;
     const SurfaceSpeed sx = speed(x);
     if (!(sx.v > 0.0)) continue;
-    Candidate best{kInf, 0.0, Vec3::Zero()};
+    Candidate best{kInf, 0.0, Vec3::Zero(), 0.0};
     update_from(x, cell, sx, &best);
     // Causality, also when the speed law changed between calls.
     if (best.t < arrival_[cell]) best.t = arrival_[cell];
@@ -162,19 +170,39 @@ void SurfaceFront::update_neighbours(int cell, const SurfaceSpeedFn& speed) {
 // Candidates for x from the newly accepted neighbour c: the straight edge c -> x, and every
 // triangle (x, c, b) of x's fan. The edge candidate keeps c's virtual source (a corner as a
 // new point source would make the factored interpolation downstream undershoot: tau far
-// from 1 between a cell and its neighbours).
+// from 1 between a cell and its neighbours) and carries c's curvature along the edge.
 void SurfaceFront::update_from(int x, int c, const SurfaceSpeed& sx, Candidate* best) const {
   const SurfaceCells& sc = *cells_;
   const Vec3& nx = sc.normals()[x];
   const Vec3 cx = sc.positions()[x] - sc.positions()[c];
   const double te = arrival_[c] + travel(sx.v, sx.e, cx);
-  if (te < best->t) *best = Candidate{te, ts_[c], onto_plane(cx, nx) + transport(w_[c], sc.normals()[c], nx)};
+  if (te < best->t) {
+    const double K = 0.5 * (sc.gauss_curvature()[x] + sc.gauss_curvature()[c]);
+    *best = Candidate{te, ts_[c], onto_plane(cx, nx) + transport(w_[c], sc.normals()[c], nx),
+                      riccati(kappa_[c], cx.norm(), K)};
+  }
+  const bool iso = sx.e.isZero();
   for (int j = sc.fan_offset()[x]; j < sc.fan_offset()[x + 1]; ++j) {
     const auto& t = sc.triangles()[sc.fan_index()[j]];
     if (t[0] != c && t[1] != c && t[2] != c) continue;
     const int b = t[0] != x && t[0] != c ? t[0] : t[1] != x && t[1] != c ? t[1] : t[2];
-    triangle_update(x, c, b, state_[b] == 2, sx, best);
+    if (iso)
+      curved_update(x, c, b, state_[b] == 2, sx, best);
+    else
+      drive_update(x, c, b, state_[b] == 2, sx, best);
   }
+}
+
+// The front's geodesic curvature after travelling `length` along a ray over a surface of
+// Gaussian curvature `gauss`: d kappa / ds = -kappa^2 - K (exact for K = 0: a circle's
+// 1 / (r + s); cot(s / R) / R on a sphere). Converging fronts are clamped at 2 / spacing,
+// where the cells cannot resolve the focus anyway.
+double SurfaceFront::riccati(double kappa, double length, double gauss) const {
+  const double floor = -2.0 / cells_->spacing();
+  if (std::isinf(kappa) && kappa > 0.0) return std::max(1.0 / length - gauss * length, floor);  // from the source point
+  const double grow = 1.0 + kappa * length;
+  const double k = (grow > 0.25 ? kappa / grow : floor) - gauss * length;
+  return std::max(k, floor);
 }
 
 namespace {
@@ -237,6 +265,40 @@ constexpr double kTauAgree = 0.05;
 
 }  // namespace
 
+namespace {
+
+// Minimal in-plane geometry of the update of x over the edge (a, b): the triangle's unit
+// normal, the edge's unit direction u and length L, and p, the in-plane unit vector
+// perpendicular to the edge pointing to x's side.
+struct EdgeFrame {
+  Vec3 nt, u, p;
+  double L;
+};
+
+bool edge_frame(const Vec3& px, const Vec3& pa, const Vec3& pb, EdgeFrame* f) {
+  f->nt = (pa - px).cross(pb - px);
+  const double nlen = f->nt.norm();
+  if (!(nlen > 1e-12 * (pa - px).squaredNorm() + 1e-300)) return false;  // degenerate
+  f->nt /= nlen;
+  f->L = (pb - pa).norm();
+  f->u = (pb - pa) / f->L;
+  f->p = f->nt.cross(f->u);
+  if (f->p.dot(px - pa) < 0.0) f->p = -f->p;
+  return true;
+}
+
+// Where the line through s and x crosses the line a + lambda (b - a), as lambda.
+double crossing(const Vec3& s, const Vec3& px, const Vec3& pa, const Vec3& pb, const Vec3& nt) {
+  const Vec3 d = px - s, q = pb - pa;
+  const double den = q.cross(d).dot(nt);
+  return std::abs(den) > 0.0 ? (s - pa).cross(d).dot(nt) / den : kInf;
+}
+
+// Directions of two fronts agree enough to share one curvature model (about 45 degrees).
+constexpr double kDirAgree = 0.7;
+
+}  // namespace
+
 // Huygens update of x over the edge (a, b) of triangle (x, a, b), in the triangle's plane.
 // The virtual source s of a reference vertex (a, and b when accepted) is unfolded into the
 // plane; with tau = (T - t_s) / T0 at both ends (T0 = travel from s), minimise over y on ab
@@ -245,7 +307,7 @@ constexpr double kTauAgree = 0.05;
 // t_s + travel(s -> x), exact in the unfolding. With b not accepted yet, a's front is
 // extended through the triangle only when the ray s -> x crosses the edge ab (obtuse
 // corners: x accepted before b would otherwise get the edge-only time).
-void SurfaceFront::triangle_update(int x, int a, int b, bool b_known, const SurfaceSpeed& sx,
+void SurfaceFront::drive_update(int x, int a, int b, bool b_known, const SurfaceSpeed& sx,
                                    Candidate* best) const {
   const SurfaceCells& sc = *cells_;
   const Vec3& px = sc.positions()[x];
@@ -264,7 +326,7 @@ void SurfaceFront::triangle_update(int x, int a, int b, bool b_known, const Surf
   auto source_of = [&](int r) { return Vec3(sc.positions()[r] - transport(w_[r], sc.normals()[r], nt)); };
   auto T0 = [&](const Vec3& d) { return (d.norm() - p.e.dot(d)) / p.W; };
   auto take = [&](double t, int ref, const Vec3& s) {
-    if (t < best->t) *best = Candidate{t, ts_[ref], transport(onto_plane(px - s, nt), nt, sc.normals()[x])};
+    if (t < best->t) *best = Candidate{t, ts_[ref], transport(onto_plane(px - s, nt), nt, sc.normals()[x]), 1.0 / std::max((px - s).norm(), 1e-300)};
   };
   if (!b_known) {
     const Vec3 s = source_of(a);
@@ -302,6 +364,103 @@ void SurfaceFront::triangle_update(int x, int a, int b, bool b_known, const Surf
     const double den = p.q.cross(d).dot(nt);
     const double lam0 = std::abs(den) > 0.0 ? (s - pa).cross(d).dot(nt) / den : 0.5;
     take(edge_value(p, edge_minimum(p, lam0)), ref, s);
+  }
+}
+
+
+// Isotropic update of x over the edge (a, b), in the triangle's plane, with the front near
+// the edge modelled as a circle of the cells' curvature (second order in the front's shape,
+// where plain fast marching assumes a plane): the circle's centre s is placed so that it
+// reproduces T(a) and T(b); T(x) = T + (|x - s| - D) / v on it. The curvature itself is
+// carried along the rays by the Riccati equation with the surface's Gaussian curvature, so
+// that positive curvature (spheres) bends the rays together as it should; the plane
+// unfolding alone (D = distance to the source) undershoots there by about h d / 40 per unit
+// distance. The circle's centre lies on the line through x and its crossing of the edge
+// must lie on the edge (else another triangle owns the ray). With b not yet accepted, a's
+// own circle is extended across the edge when its ray to x crosses it.
+void SurfaceFront::curved_update(int x, int a, int b, bool b_known, const SurfaceSpeed& sx,
+                                 Candidate* best) const {
+  const SurfaceCells& sc = *cells_;
+  const Vec3& px = sc.positions()[x];
+  const Vec3& pa = sc.positions()[a];
+  const Vec3& pb = sc.positions()[b];
+  EdgeFrame f;
+  if (!edge_frame(px, pa, pb, &f)) return;
+  const double v = sx.v;
+  const auto& K = sc.gauss_curvature();
+  auto dir_of = [&](int r) {
+    const Vec3 g = transport(w_[r], sc.normals()[r], f.nt);
+    const double len = g.norm();
+    return len > 0.0 ? Vec3(g / len) : Vec3(Vec3::Zero());
+  };
+  // Offer T with the circle (centre s, signed curvature sign/D) crossing the edge at y.
+  auto take = [&](double t, const Vec3& s, double lam, bool diverging, double gauss) {
+    if (!(lam >= -1e-9 && lam <= 1.0 + 1e-9) || !(t < best->t)) return;
+    const Vec3 y = pa + std::clamp(lam, 0.0, 1.0) * (pb - pa);
+    const double ry = (y - s).norm(), rx = (px - s).norm();
+    if (!(ry > 0.0) || !(rx > 0.0)) return;
+    // The ray must reach x through the edge: y between s and x (spreading), or y behind x
+    // as seen from the focus s (converging).
+    if (diverging ? ((y - s).dot(px - s) <= 0.0 || ry > rx * (1.0 + 1e-12)) : (y - px).dot(s - px) > 0.0) return;
+    const Vec3 g = diverging ? Vec3((px - s) / rx) : Vec3((s - px) / rx);
+    const double k = riccati(diverging ? 1.0 / ry : -1.0 / ry, (px - y).norm(), gauss);
+    const Vec3 w = transport(g, f.nt, sc.normals()[x]) * std::max(t - ts_[a], 0.0) * v;
+    *best = Candidate{t, t - w.norm() / v, w, k};
+  };
+  if (!b_known) {
+    const double ka = kappa_[a];
+    if (!(ka > 0.0)) return;
+    const double D = 1.0 / ka;
+    const Vec3 s = pa - dir_of(a) * D;
+    if ((px - s).dot(pa - s) <= 0.0) return;
+    take(arrival_[a] + ((px - s).norm() - D) / v, s, crossing(s, px, pa, pb, f.nt), true,
+         (K[x] + K[a]) / 2.0);
+    return;
+  }
+  const double gauss = (K[x] + K[a] + K[b]) / 3.0;
+  // Linear interpolation of T along the edge: first order, never below a convex T.
+  {
+    EdgeProblem lp;
+    lp.pa = pa, lp.q = pb - pa, lp.px = px, lp.e = Vec3::Zero(), lp.W = v;
+    lp.factored = false, lp.Ta = arrival_[a], lp.dT = arrival_[b] - arrival_[a];
+    const double lam = edge_minimum(lp, 0.5);
+    const double t = edge_value(lp, lam);
+    if (t < best->t) {
+      const Vec3 y = pa + lam * lp.q;
+      const int early = arrival_[a] <= arrival_[b] ? a : b;
+      const double kk = lam <= 0.0 ? kappa_[a] : lam >= 1.0 ? kappa_[b] : (1.0 - lam) * kappa_[a] + lam * kappa_[b];
+      const Vec3 w = transport(onto_plane(px - y, f.nt).normalized(), f.nt, sc.normals()[x]) *
+                     std::max(t - ts_[early], 0.0) * v;
+      *best = Candidate{t, ts_[early], w, riccati(kk, (px - y).norm(), gauss)};
+    }
+  }
+  const double c = (arrival_[b] - arrival_[a]) * v / f.L;  // n . u of the front's normal n
+  if (!(std::abs(c) < 1.0)) return;
+  const Vec3 n = c * f.u + std::sqrt(1.0 - c * c) * f.p;
+  const Vec3 ga = dir_of(a), gb = dir_of(b);
+  double kap = 0.0;
+  if (n.dot(ga) > kDirAgree && n.dot(gb) > kDirAgree) {
+    const double ka = kappa_[a], kb = kappa_[b];
+    // Spreading fronts: average the radii (exact for a point source in the plane).
+    kap = ka > 0.0 && kb > 0.0 ? 2.0 / (1.0 / ka + 1.0 / kb) : 0.5 * (ka + kb);
+  }
+  const double Tbar = 0.5 * (arrival_[a] + arrival_[b]);
+  const Vec3 m = 0.5 * (pa + pb);
+  if (std::abs(kap) * f.L < 1e-7) {  // a plane front
+    const Vec3 s = px - n;  // any point behind x on its ray
+    take(Tbar + n.dot(px - m) / v, s, crossing(s, px, pa, pb, f.nt), true, gauss);
+    return;
+  }
+  const double D = 1.0 / std::abs(kap);
+  if (!(D > 0.5 * f.L)) return;
+  const double hgt = std::sqrt((1.0 - c * c) * (D * D - 0.25 * f.L * f.L));
+  if (kap > 0.0) {
+    const Vec3 s = pa + (0.5 * f.L - c * D) * f.u - hgt * f.p;
+    take(Tbar + ((px - s).norm() - D) / v, s, crossing(s, px, pa, pb, f.nt), true, gauss);
+  } else {
+    const Vec3 s = pa + (0.5 * f.L + c * D) * f.u + hgt * f.p;
+    if ((s - px).dot(f.p) <= 0.0) return;  // x lies beyond the focus
+    take(Tbar + (D - (px - s).norm()) / v, s, crossing(s, px, pa, pb, f.nt), false, gauss);
   }
 }
 

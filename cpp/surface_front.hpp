@@ -71,30 +71,37 @@ class SurfaceFront {
   /// cell (in the cell's tangent plane): where its front seems to come from (diagnostics).
   const std::vector<double>& source_times() const { return ts_; }
   const std::vector<Eigen::Vector3d>& source_vectors() const { return w_; }
+  /// @brief Per cell: the front's geodesic curvature there (1/m; > 0 spreading).
+  const std::vector<double>& front_curvature() const { return kappa_; }
 
  private:
   struct Entry {
     double t;
     int cell;
   };
-  // A candidate arrival at a cell: time, virtual source time and source-to-cell vector.
+  // A candidate arrival at a cell: time, virtual source time, source-to-cell vector and the
+  // front's geodesic curvature there (> 0 spreading, < 0 converging).
   struct Candidate {
     double t;
     double ts;
     Eigen::Vector3d w;
+    double kappa;
   };
 
   void check_ignite(double t0) const;
   void offer(int cell, const Candidate& c);
   void update_neighbours(int cell, const SurfaceSpeedFn& speed);
   void update_from(int x, int c, const SurfaceSpeed& sx, Candidate* best) const;
-  void triangle_update(int x, int a, int b, bool b_known, const SurfaceSpeed& sx,
-                       Candidate* best) const;
+  void drive_update(int x, int a, int b, bool b_known, const SurfaceSpeed& sx,
+                    Candidate* best) const;
+  void curved_update(int x, int a, int b, bool b_known, const SurfaceSpeed& sx,
+                     Candidate* best) const;
+  double riccati(double kappa, double length, double gauss) const;
 
   std::shared_ptr<const SurfaceCells> cells_;
   SurfaceFrontOptions opt_;
   std::vector<std::uint8_t> state_;  // 0 far, 1 trial, 2 accepted
-  std::vector<double> tent_, arrival_, ts_;
+  std::vector<double> tent_, arrival_, ts_, kappa_;
   std::vector<Eigen::Vector3d> w_;   // virtual source -> cell, in the cell's tangent plane
   std::vector<Entry> heap_;
   std::vector<int> accepted_now_, flood_, stamp_;

@@ -115,7 +115,7 @@ class PySurfaceFront {
   double time() const { return front_.time(); }
   std::shared_ptr<const SurfaceCells> cells() const { return cells_; }
   py::tuple virtual_sources() const {
-    return py::make_tuple(flat(front_.source_times()), rows3(front_.source_vectors()));
+    return py::make_tuple(flat(front_.source_times()), rows3(front_.source_vectors()), flat(front_.front_curvature()));
   }
 
  private:
@@ -147,6 +147,7 @@ void define_surface_front(py::module_& m) {
       .def_property_readonly("dense_size", &SurfaceCells::dense_size)
       .def_property_readonly("positions", [](const SurfaceCells& c) { return rows3(c.positions()); })
       .def_property_readonly("normals", [](const SurfaceCells& c) { return rows3(c.normals()); })
+      .def_property_readonly("gauss_curvature", [](const SurfaceCells& c) { return flat(c.gauss_curvature()); })
       .def_property_readonly("areas", [](const SurfaceCells& c) { return flat(c.areas()); })
       .def_property_readonly("nbr_offset", [](const SurfaceCells& c) { return flat(c.nbr_offset()); })
       .def_property_readonly("nbr_index", [](const SurfaceCells& c) { return flat(c.nbr_index()); })
