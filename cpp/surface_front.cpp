@@ -407,14 +407,27 @@ void SurfaceFront::curved_update(int x, int a, int b, bool b_known, const Surfac
     const Vec3 w = transport(g, f.nt, sc.normals()[x]) * std::max(t - ts_[a], 0.0) * v;
     *best = Candidate{t, t - w.norm() / v, w, k};
   };
+  // One end's own circle extended to x, when its ray to x crosses the edge.
+  auto extend = [&](int r) {
+    const double kr = kappa_[r];
+    if (!(kr > 0.0)) return;
+    const double D = 1.0 / kr;
+    const Vec3& pr = sc.positions()[r];
+    const Vec3 s = pr - dir_of(r) * D;
+    if ((px - s).dot(pr - s) <= 0.0) return;
+    take(arrival_[r] + ((px - s).norm() - D) / v, s, crossing(s, px, pa, pb, f.nt), true,
+         (K[x] + K[r]) / 2.0);
+  };
   if (!b_known) {
-    const double ka = kappa_[a];
-    if (!(ka > 0.0)) return;
-    const double D = 1.0 / ka;
-    const Vec3 s = pa - dir_of(a) * D;
-    if ((px - s).dot(pa - s) <= 0.0) return;
-    take(arrival_[a] + ((px - s).norm() - D) / v, s, crossing(s, px, pa, pb, f.nt), true,
-         (K[x] + K[a]) / 2.0);
+    extend(a);
+    return;
+  }
+  const Vec3 ga = dir_of(a), gb = dir_of(b);
+  if (!(ga.dot(gb) > kDirAgree)) {
+    // Fronts from different directions meet here (a collision line): T has a ridge along
+    // the edge, and both the linear and the two-point models would cut below it.
+    extend(a);
+    extend(b);
     return;
   }
   const double gauss = (K[x] + K[a] + K[b]) / 3.0;
@@ -437,7 +450,6 @@ void SurfaceFront::curved_update(int x, int a, int b, bool b_known, const Surfac
   const double c = (arrival_[b] - arrival_[a]) * v / f.L;  // n . u of the front's normal n
   if (!(std::abs(c) < 1.0)) return;
   const Vec3 n = c * f.u + std::sqrt(1.0 - c * c) * f.p;
-  const Vec3 ga = dir_of(a), gb = dir_of(b);
   double kap = 0.0;
   if (n.dot(ga) > kDirAgree && n.dot(gb) > kDirAgree) {
     const double ka = kappa_[a], kb = kappa_[b];
