@@ -362,7 +362,7 @@ void lloyd_step(const Mesh& m, const Graph& g, const std::vector<int>& label, st
 
 // Angle deficit 2 pi - (sum of the corner angles) at each vertex; 0 on the boundary, where
 // the deficit measures the boundary's turning rather than the surface's curvature.
-std::vector<double> angle_deficits(const Mesh& m) {
+std::vector<double> angle_deficits(const Mesh& m, std::vector<std::uint8_t>* on_boundary) {
   const int n = static_cast<int>(m.v.size());
   std::vector<double> angle(n, 0.0);
   std::unordered_map<std::uint64_t, int> edge_count;
@@ -379,6 +379,7 @@ std::vector<double> angle_deficits(const Mesh& m) {
     if (count == 1) boundary[key >> 32] = boundary[key & 0xffffffffu] = 1;
   std::vector<double> out(n, 0.0);
   for (int i = 0; i < n; ++i) out[i] = boundary[i] ? 0.0 : 2.0 * kPi - angle[i];
+  *on_boundary = std::move(boundary);
   return out;
 }
 
@@ -497,8 +498,13 @@ SurfaceCells::SurfaceCells(const SurfVerts& V, const SurfFaces& F, const CellOpt
   area_.assign(nc, 0.0);
   for (int v = 0; v < n_dense_; ++v) area_[label[v]] += g.area[v];
   gauss_.assign(nc, 0.0);
-  const std::vector<double> deficit = angle_deficits(m);
-  for (int v = 0; v < n_dense_; ++v) gauss_[label[v]] += deficit[v];
+  std::vector<std::uint8_t> dense_boundary;
+  const std::vector<double> deficit = angle_deficits(m, &dense_boundary);
+  boundary_.assign(nc, 0);
+  for (int v = 0; v < n_dense_; ++v) {
+    gauss_[label[v]] += deficit[v];
+    if (dense_boundary[v]) boundary_[label[v]] = 1;
+  }
   for (int i = 0; i < nc; ++i) gauss_[i] = area_[i] > 0.0 ? gauss_[i] / area_[i] : 0.0;
   std::vector<Vec3> nsum(nc, Vec3::Zero());
   std::vector<std::pair<int, int>> nbr_pairs;

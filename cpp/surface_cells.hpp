@@ -11,6 +11,7 @@
 /// not on how densely or how it was triangulated, nor on how it lies in space.
 #include <array>
 #include <cstddef>
+#include <cstdint>
 #include <vector>
 
 #include <Eigen/Core>
@@ -75,6 +76,8 @@ class SurfaceCells {
   /// @brief Gaussian curvature of the cell's region (1/m^2): the angle deficits of the
   /// dense mesh's interior vertices in the region over its area (discrete Gauss-Bonnet).
   const std::vector<double>& gauss_curvature() const { return gauss_; }
+  /// @brief 1 where the cell's region touches the mesh's boundary (an open edge or a hole).
+  const std::vector<std::uint8_t>& on_boundary() const { return boundary_; }
   /// @brief Neighbours of cell c: nbr_index()[nbr_offset()[c] .. nbr_offset()[c+1]).
   const std::vector<int>& nbr_offset() const { return nbr_off_; }
   const std::vector<int>& nbr_index() const { return nbr_idx_; }
@@ -98,6 +101,7 @@ class SurfaceCells {
   std::vector<double> area_, gauss_;
   std::vector<int> nbr_off_, nbr_idx_, fan_off_, fan_idx_;
   std::vector<std::array<int, 3>> tri_;
+  std::vector<std::uint8_t> boundary_;
   std::vector<std::array<int, 3>> vcell_;
   std::vector<std::array<double, 3>> vweight_;
   KdTree3 tree_;

@@ -48,6 +48,10 @@ Vec3 onto_plane(const Vec3& d, const Vec3& n) {
   return len > 0.0 ? Vec3(t * (d.norm() / len)) : t;
 }
 
+// A ray continuing from a cell within this cosine (about 11 degrees) of its direction
+// there goes straight on; a sharper bend makes the cell a secondary source (a corner).
+constexpr double kStraight = 0.98;
+
 }  // namespace
 
 SurfaceFront::SurfaceFront(std::shared_ptr<const SurfaceCells> cells, const SurfaceFrontOptions& options)
@@ -168,20 +172,31 @@ void SurfaceFront::update_neighbours(int cell, const SurfaceSpeedFn& speed) {
 }
 
 // Candidates for x from the newly accepted neighbour c: the straight edge c -> x, and every
-// triangle (x, c, b) of x's fan. The edge candidate keeps c's virtual source (a corner as a
-// new point source would make the factored interpolation downstream undershoot: tau far
-// from 1 between a cell and its neighbours) and carries c's curvature along the edge.
+// triangle (x, c, b) of x's fan. With a drive the edge candidate keeps c's virtual source (a
+// corner as a new point source would make the factored interpolation downstream undershoot:
+// tau far from 1 between neighbours). Isotropic, it records the edge's own direction (the
+// ray's, which the curvature model's centres are placed along) and, where the ray bends at c
+// (round a hole's corner), the circle about c that the front then is.
 void SurfaceFront::update_from(int x, int c, const SurfaceSpeed& sx, Candidate* best) const {
   const SurfaceCells& sc = *cells_;
   const Vec3& nx = sc.normals()[x];
   const Vec3 cx = sc.positions()[x] - sc.positions()[c];
   const double te = arrival_[c] + travel(sx.v, sx.e, cx);
+  const bool iso = sx.e.isZero();
   if (te < best->t) {
     const double K = 0.5 * (sc.gauss_curvature()[x] + sc.gauss_curvature()[c]);
-    *best = Candidate{te, ts_[c], onto_plane(cx, nx) + transport(w_[c], sc.normals()[c], nx),
-                      riccati(kappa_[c], cx.norm(), K)};
+    const Vec3 wc = transport(w_[c], sc.normals()[c], nx);
+    const Vec3 leg = onto_plane(cx, nx);
+    const double l = leg.norm();
+    if (!iso || !(l > 0.0)) {
+      *best = Candidate{te, ts_[c], leg + wc, riccati(kappa_[c], l, K)};
+    } else {
+      const double wl = wc.norm();
+      const bool straight = wl > 0.0 && wc.dot(leg) > kStraight * wl * l;
+      const double k = straight ? riccati(kappa_[c], l, K) : riccati(kInf, l, K);
+      *best = Candidate{te, ts_[c], leg * ((wl + l) / l), k};
+    }
   }
-  const bool iso = sx.e.isZero();
   for (int j = sc.fan_offset()[x]; j < sc.fan_offset()[x + 1]; ++j) {
     const auto& t = sc.triangles()[sc.fan_index()[j]];
     if (t[0] != c && t[1] != c && t[2] != c) continue;
@@ -191,6 +206,22 @@ void SurfaceFront::update_from(int x, int c, const SurfaceSpeed& sx, Candidate* 
     else
       drive_update(x, c, b, state_[b] == 2, sx, best);
   }
+}
+
+// Whether every accepted neighbour c of x could lie on a's front circle: radii differing by
+// at most twice their distance (one point source gives at most once).
+bool SurfaceFront::radius_consistent(int x, int a) const {
+  const SurfaceCells& sc = *cells_;
+  const double ka = kappa_[a];
+  if (!(ka > 0.0)) return false;
+  const double da = 1.0 / ka;
+  for (int j = sc.nbr_offset()[x]; j < sc.nbr_offset()[x + 1]; ++j) {
+    const int c = sc.nbr_index()[j];
+    if (c == a || state_[c] != 2) continue;
+    const double dc = kappa_[c] > 0.0 ? 1.0 / kappa_[c] : kInf;
+    if (!(std::abs(da - dc) <= 2.0 * (sc.positions()[c] - sc.positions()[a]).norm())) return false;
+  }
+  return true;
 }
 
 // The front's geodesic curvature after travelling `length` along a ray over a surface of
@@ -393,46 +424,47 @@ void SurfaceFront::curved_update(int x, int a, int b, bool b_known, const Surfac
     const double len = g.norm();
     return len > 0.0 ? Vec3(g / len) : Vec3(Vec3::Zero());
   };
-  // Offer T with the circle (centre s, signed curvature sign/D) crossing the edge at y.
-  auto take = [&](double t, const Vec3& s, double lam, bool diverging, double gauss) {
-    if (!(lam >= -1e-9 && lam <= 1.0 + 1e-9) || !(t < best->t)) return;
+  const Candidate none{kInf, 0.0, Vec3::Zero(), 0.0};
+  // T on the circle (centre s, signed curvature 1/D) whose ray reaches x across the edge
+  // at lambda; `none` if it does not.
+  auto circle = [&](double t, const Vec3& s, double lam, bool diverging, double gauss) {
+    if (!(lam >= -1e-9 && lam <= 1.0 + 1e-9) || !std::isfinite(t)) return none;
     const Vec3 y = pa + std::clamp(lam, 0.0, 1.0) * (pb - pa);
     const double ry = (y - s).norm(), rx = (px - s).norm();
-    if (!(ry > 0.0) || !(rx > 0.0)) return;
+    if (!(ry > 0.0) || !(rx > 0.0)) return none;
     // The ray must reach x through the edge: y between s and x (spreading), or y behind x
     // as seen from the focus s (converging).
-    if (diverging ? ((y - s).dot(px - s) <= 0.0 || ry > rx * (1.0 + 1e-12)) : (y - px).dot(s - px) > 0.0) return;
+    if (diverging ? ((y - s).dot(px - s) <= 0.0 || ry > rx * (1.0 + 1e-12)) : (y - px).dot(s - px) > 0.0) return none;
     const Vec3 g = diverging ? Vec3((px - s) / rx) : Vec3((s - px) / rx);
     const double k = riccati(diverging ? 1.0 / ry : -1.0 / ry, (px - y).norm(), gauss);
     const Vec3 w = transport(g, f.nt, sc.normals()[x]) * std::max(t - ts_[a], 0.0) * v;
-    *best = Candidate{t, t - w.norm() / v, w, k};
+    return Candidate{t, t - w.norm() / v, w, k};
+  };
+  auto take = [&](const Candidate& c) {
+    if (c.t < best->t) *best = c;
   };
   // One end's own circle extended to x, when its ray to x crosses the edge.
   auto extend = [&](int r) {
     const double kr = kappa_[r];
-    if (!(kr > 0.0)) return;
+    if (!(kr > 0.0)) return none;
     const double D = 1.0 / kr;
     const Vec3& pr = sc.positions()[r];
     const Vec3 s = pr - dir_of(r) * D;
-    if ((px - s).dot(pr - s) <= 0.0) return;
-    take(arrival_[r] + ((px - s).norm() - D) / v, s, crossing(s, px, pa, pb, f.nt), true,
-         (K[x] + K[r]) / 2.0);
+    if ((px - s).dot(pr - s) <= 0.0) return none;
+    return circle(arrival_[r] + ((px - s).norm() - D) / v, s, crossing(s, px, pa, pb, f.nt), true,
+                  (K[x] + K[r]) / 2.0);
   };
   if (!b_known) {
-    extend(a);
-    return;
-  }
-  const Vec3 ga = dir_of(a), gb = dir_of(b);
-  if (!(ga.dot(gb) > kDirAgree)) {
-    // Fronts from different directions meet here (a collision line): T has a ridge along
-    // the edge, and both the linear and the two-point models would cut below it.
-    extend(a);
-    extend(b);
+    // x is due before b (a wide corner at x): a's circle alone, unless x's accepted cells
+    // hold fronts of other radii (a shadow line: a's circle, centred where x is not seen,
+    // would be carried into the shadow and on through a hole).
+    if (!radius_consistent(x, a)) return;
+    take(extend(a));
     return;
   }
   const double gauss = (K[x] + K[a] + K[b]) / 3.0;
   // Linear interpolation of T along the edge: first order, never below a convex T.
-  {
+  auto lin = [&]() {
     EdgeProblem lp;
     lp.pa = pa, lp.q = pb - pa, lp.px = px, lp.e = Vec3::Zero(), lp.W = v;
     lp.factored = false, lp.Ta = arrival_[a], lp.dT = arrival_[b] - arrival_[a];
@@ -446,13 +478,37 @@ void SurfaceFront::curved_update(int x, int a, int b, bool b_known, const Surfac
                      std::max(t - ts_[early], 0.0) * v;
       *best = Candidate{t, ts_[early], w, riccati(kk, (px - y).norm(), gauss)};
     }
+  };
+  const Vec3 ga = dir_of(a), gb = dir_of(b);
+  if (!(ga.dot(gb) > kDirAgree)) {
+    // Fronts from different directions meet here (a collision line): T has a ridge along
+    // the edge, and both the linear and the two-point models would cut below it. Each
+    // front holds on its own side: the earlier of the two.
+    take(extend(a));
+    take(extend(b));
+    return;
   }
+  lin();
   const double c = (arrival_[b] - arrival_[a]) * v / f.L;  // n . u of the front's normal n
   if (!(std::abs(c) < 1.0)) return;
   const Vec3 n = c * f.u + std::sqrt(1.0 - c * c) * f.p;
   double kap = 0.0;
   if (n.dot(ga) > kDirAgree && n.dot(gb) > kDirAgree) {
     const double ka = kappa_[a], kb = kappa_[b];
+    // One circle through both ends only if their radii could be one front's: two points of
+    // a circle differ in radius by at most the edge (a front lit directly next to one bent
+    // round a corner, tangent to it at the shadow line, would make the circle cut below
+    // both). Nearly plane fronts agree whatever their signs.
+    const bool flat = std::max(std::abs(ka), std::abs(kb)) * f.L < 0.05;
+    const bool same = ka * kb > 0.0 && std::abs(1.0 / ka - 1.0 / kb) <= 2.0 * f.L;
+    if (!flat && !same) {
+      // A shadow line: a front seen directly beside one bent round a corner, tangent to
+      // it. The bent one is the later of the two wherever both reach, and the direct one
+      // must not be carried into the shadow: the later of the two, and only if both reach.
+      const Candidate ea = extend(a), eb = extend(b);
+      if (ea.t < kInf && eb.t < kInf) take(ea.t > eb.t ? ea : eb);
+      return;
+    }
     // Spreading fronts: average the radii (exact for a point source in the plane).
     kap = ka > 0.0 && kb > 0.0 ? 2.0 / (1.0 / ka + 1.0 / kb) : 0.5 * (ka + kb);
   }
@@ -460,7 +516,7 @@ void SurfaceFront::curved_update(int x, int a, int b, bool b_known, const Surfac
   const Vec3 m = 0.5 * (pa + pb);
   if (std::abs(kap) * f.L < 1e-7) {  // a plane front
     const Vec3 s = px - n;  // any point behind x on its ray
-    take(Tbar + n.dot(px - m) / v, s, crossing(s, px, pa, pb, f.nt), true, gauss);
+    take(circle(Tbar + n.dot(px - m) / v, s, crossing(s, px, pa, pb, f.nt), true, gauss));
     return;
   }
   const double D = 1.0 / std::abs(kap);
@@ -468,11 +524,11 @@ void SurfaceFront::curved_update(int x, int a, int b, bool b_known, const Surfac
   const double hgt = std::sqrt((1.0 - c * c) * (D * D - 0.25 * f.L * f.L));
   if (kap > 0.0) {
     const Vec3 s = pa + (0.5 * f.L - c * D) * f.u - hgt * f.p;
-    take(Tbar + ((px - s).norm() - D) / v, s, crossing(s, px, pa, pb, f.nt), true, gauss);
+    take(circle(Tbar + ((px - s).norm() - D) / v, s, crossing(s, px, pa, pb, f.nt), true, gauss));
   } else {
     const Vec3 s = pa + (0.5 * f.L + c * D) * f.u + hgt * f.p;
     if ((s - px).dot(f.p) <= 0.0) return;  // x lies beyond the focus
-    take(Tbar + (D - (px - s).norm()) / v, s, crossing(s, px, pa, pb, f.nt), false, gauss);
+    take(circle(Tbar + (D - (px - s).norm()) / v, s, crossing(s, px, pa, pb, f.nt), false, gauss));
   }
 }
 

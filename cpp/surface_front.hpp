@@ -11,6 +11,7 @@
 /// developable surfaces in a uniform medium, first order elsewhere, and no O(1) error cone
 /// at point sources. Single-threaded: the loop is a priority queue over the narrow band.
 #include <cstddef>
+#include <cstdint>
 #include <functional>
 #include <memory>
 #include <vector>
@@ -97,6 +98,7 @@ class SurfaceFront {
   void curved_update(int x, int a, int b, bool b_known, const SurfaceSpeed& sx,
                      Candidate* best) const;
   double riccati(double kappa, double length, double gauss) const;
+  bool radius_consistent(int x, int a) const;
 
   std::shared_ptr<const SurfaceCells> cells_;
   SurfaceFrontOptions opt_;

@@ -148,6 +148,7 @@ void define_surface_front(py::module_& m) {
       .def_property_readonly("positions", [](const SurfaceCells& c) { return rows3(c.positions()); })
       .def_property_readonly("normals", [](const SurfaceCells& c) { return rows3(c.normals()); })
       .def_property_readonly("gauss_curvature", [](const SurfaceCells& c) { return flat(c.gauss_curvature()); })
+      .def_property_readonly("on_boundary", [](const SurfaceCells& c) { return flat(c.on_boundary()); })
       .def_property_readonly("areas", [](const SurfaceCells& c) { return flat(c.areas()); })
       .def_property_readonly("nbr_offset", [](const SurfaceCells& c) { return flat(c.nbr_offset()); })
       .def_property_readonly("nbr_index", [](const SurfaceCells& c) { return flat(c.nbr_index()); })
