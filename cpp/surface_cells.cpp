@@ -180,7 +180,7 @@ void refine(Mesh& m, double hd) {
     for (const Face& f : m.f)
       for (int k = 0; k < 3; ++k) {
         const int a = f[k], b = f[(k + 1) % 3];
-        if ((m.v[a] - m.v[b]).norm() <= hd) continue;
+        if ((m.v[a] - m.v[b]).norm() <= hd * (1.0 + 1e-9)) continue;  // margin: pose-proof
         auto [it, fresh] = mid.try_emplace(edge_key(a, b), -1);
         if (fresh) {
           it->second = static_cast<int>(m.v.size());
@@ -221,7 +221,9 @@ void refine(Mesh& m, double hd) {
       const int v0 = f[k], v1 = f[(k + 1) % 3], v2 = f[(k + 2) % 3];
       const int m1 = e[(k + 1) % 3], m2 = e[(k + 2) % 3];  // on v2-v0 and v0-v1
       out.push_back({v0, m2, m1});
-      if ((m.v[m2] - m.v[v2]).norm() < (m.v[m1] - m.v[v1]).norm()) {
+      // The shorter diagonal; near-ties (regular meshes) by a rule that rotation cannot flip.
+      const double l2 = (m.v[m2] - m.v[v2]).norm(), l1 = (m.v[m1] - m.v[v1]).norm();
+      if (l2 < l1 * (1.0 - 1e-9) || (l2 <= l1 * (1.0 + 1e-9) && v2 < v1)) {
         out.push_back({m2, v1, v2});
         out.push_back({m2, v2, m1});
       } else {
@@ -239,7 +241,10 @@ struct Graph {
   std::vector<double> len, area;
 };
 
-Graph graph_of(const Mesh& m) {
+// Edge lengths are rounded to multiples of `quantum` (1e-9 of the dense spacing): regular
+// meshes have many exactly tied graph distances, and the sampling must break those ties the
+// same way however the mesh is moved (rounding noise of a rotation would break them anew).
+Graph graph_of(const Mesh& m, double quantum) {
   const int n = static_cast<int>(m.v.size());
   std::vector<std::uint64_t> keys;
   keys.reserve(m.f.size() * 3);
@@ -265,7 +270,7 @@ Graph graph_of(const Mesh& m) {
   std::vector<int> fill(g.off.begin(), g.off.end() - 1);
   for (std::uint64_t k : keys) {
     const int a = static_cast<int>(k >> 32), b = static_cast<int>(k & 0xffffffffu);
-    const double l = (m.v[a] - m.v[b]).norm();
+    const double l = std::max(1.0, std::round((m.v[a] - m.v[b]).norm() / quantum)) * quantum;
     g.nbr[fill[a]] = b, g.len[fill[a]++] = l;
     g.nbr[fill[b]] = a, g.len[fill[b]++] = l;
   }
@@ -345,7 +350,8 @@ void voronoi(const Graph& g, const std::vector<int>& seeds, std::vector<int>* la
 }
 
 // One Lloyd step: each seed moves to the vertex of its region nearest the region's centroid.
-void lloyd_step(const Mesh& m, const Graph& g, const std::vector<int>& label, std::vector<int>* seeds) {
+void lloyd_step(const Mesh& m, const Graph& g, const std::vector<int>& label, double quantum,
+                std::vector<int>* seeds) {
   const int k = static_cast<int>(seeds->size());
   std::vector<Vec3> c(k, Vec3::Zero());
   std::vector<double> w(k, 0.0), best(k, kInf);
@@ -355,7 +361,7 @@ void lloyd_step(const Mesh& m, const Graph& g, const std::vector<int>& label, st
   }
   for (int i = 0; i < k; ++i) c[i] /= w[i];
   for (int v = 0; v < static_cast<int>(label.size()); ++v) {
-    const double d = (m.v[v] - c[label[v]]).squaredNorm();
+    const double d = std::round((m.v[v] - c[label[v]]).norm() / quantum);  // ties as in graph_of
     if (d < best[label[v]]) best[label[v]] = d, (*seeds)[label[v]] = v;
   }
 }
@@ -392,18 +398,32 @@ void csr(int n, const std::vector<std::pair<int, int>>& pairs, std::vector<int>*
   for (const auto& p : pairs) (*idx)[fill[p.first]++] = p.second;
 }
 
-// Barycentric weights of p (projected into the triangle's plane) in (a, b, c); false outside.
-bool barycentric(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c, std::array<double, 3>* w) {
+// Barycentric weights of p (projected into the triangle's plane) in (a, b, c), clamped onto
+// the triangle; returns the distance from p to the clamped point (inf if degenerate).
+double barycentric(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c, std::array<double, 3>* w) {
   const Vec3 e1 = b - a, e2 = c - a, d = p - a;
   const double d11 = e1.dot(e1), d12 = e1.dot(e2), d22 = e2.dot(e2);
   const double det = d11 * d22 - d12 * d12;
-  if (!(det > 0.0)) return false;
-  const double u = (d22 * e1.dot(d) - d12 * e2.dot(d)) / det;
-  const double v = (d11 * e2.dot(d) - d12 * e1.dot(d)) / det;
-  const double tol = -1e-9;
-  if (u < tol || v < tol || u + v > 1.0 - tol) return false;
+  if (!(det > 0.0)) return kInf;
+  double u = (d22 * e1.dot(d) - d12 * e2.dot(d)) / det;
+  double v = (d11 * e2.dot(d) - d12 * e1.dot(d)) / det;
+  if (u < 0.0 || v < 0.0 || u + v > 1.0) {  // outside: the nearest point of the three edges
+    double best = kInf;
+    const Vec3* P[3] = {&a, &b, &c};
+    for (int k = 0; k < 3; ++k) {
+      const Vec3 &s = *P[k], &t = *P[(k + 1) % 3];
+      const double l = std::clamp((p - s).dot(t - s) / (t - s).squaredNorm(), 0.0, 1.0);
+      const double dist = (p - (s + l * (t - s))).squaredNorm();
+      if (dist >= best) continue;
+      best = dist;
+      std::array<double, 3> wk{0.0, 0.0, 0.0};
+      wk[k] = 1.0 - l, wk[(k + 1) % 3] = l;
+      u = wk[1], v = wk[2];
+    }
+  }
   *w = {1.0 - u - v, u, v};
-  return true;
+  const Vec3 q = a + u * e1 + v * e2;
+  return (p - q).norm();
 }
 
 }  // namespace
@@ -483,12 +503,12 @@ SurfaceCells::SurfaceCells(const SurfVerts& V, const SurfFaces& F, const CellOpt
   const int n_input_mesh = static_cast<int>(m.v.size());
   refine(m, h_ / opt.refine);
   n_dense_ = static_cast<int>(m.v.size());
-  const Graph g = graph_of(m);
+  const Graph g = graph_of(m, 1e-9 * h_ / opt.refine);
 
   std::vector<int> label;
   std::vector<int> seeds = farthest_points(g, k, &label);
   for (int it = 0; it < opt.lloyd_iters; ++it) {
-    lloyd_step(m, g, label, &seeds);
+    lloyd_step(m, g, label, 1e-9 * h_ / opt.refine, &seeds);
     voronoi(g, seeds, &label);
   }
   const int nc = static_cast<int>(seeds.size());
@@ -548,13 +568,15 @@ SurfaceCells::SurfaceCells(const SurfVerts& V, const SurfFaces& F, const CellOpt
     const int c = mv >= 0 && mv < n_input_mesh ? label[mv] : nearest(p);
     vcell_[i] = {c, c, c};
     vweight_[i] = {1.0, 0.0, 0.0};
+    double best = (p - pos_[c]).norm();
     for (int j = fan_off_[c]; j < fan_off_[c + 1]; ++j) {
       const Face& t = tri_[fan_idx_[j]];
       std::array<double, 3> w;
-      if (barycentric(p, pos_[t[0]], pos_[t[1]], pos_[t[2]], &w)) {
+      const double d = barycentric(p, pos_[t[0]], pos_[t[1]], pos_[t[2]], &w);
+      if (d < best - 1e-12 * h_ || (d <= best && best > 0.0 && d == 0.0)) {
+        best = d;
         vcell_[i] = t;
         vweight_[i] = w;
-        break;
       }
     }
   }
