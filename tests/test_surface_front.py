@@ -41,7 +41,7 @@ def test_cylinder_matches_unrolled_distance_including_the_far_side():
     t, sc = solve(V, F, CYL_SRC, 32)
     ex = S.cylinder_exact(sc.positions, CYL_SRC)
     mx, mean = rel_error(t, ex, sc.spacing)
-    assert mx < 3e-3 and mean < 1.5e-3  # measured 0.153 % max, 0.077 % mean
+    assert mx < 3e-3 and mean < 1.5e-3  # measured 0.120 % max, 0.061 % mean
     far = ex > 0.28  # behind the lantern: the grid front caught here at half the time
     assert far.sum() > 20
     assert np.max(np.abs(t[far] - ex[far]) / ex[far]) < 3e-3
@@ -59,7 +59,7 @@ def test_cone_matches_unrolled_distance_round_the_cut_apex():
     src = np.array([0.2 * 0.6, 0.0, 0.3 * 0.6])
     t, sc = solve(V, F, src, 64)
     mx, mean = rel_error(t, S.cone_exact(sc.positions, src), sc.spacing)
-    assert mx < 1.5e-2 and mean < 5e-4  # measured 0.90 % max (cells on the rim), 0.016 % mean
+    assert mx < 1.2e-2 and mean < 5e-4  # measured 0.67 % max (cells on the rim), 0.020 % mean
 
 
 def test_matches_exact_polyhedral_geodesics_on_a_wavy_sheet():
@@ -112,7 +112,7 @@ def test_drive_gives_the_focus_ellipse_on_a_sheet_and_a_lantern():
     du = S.cylinder_exact(np.c_[P[:, :2], np.full(len(P), CYL_SRC[2])], CYL_SRC)
     dz = P[:, 2] - CYL_SRC[2]
     ex = (np.hypot(du, dz) - 0.5 * dz) / 0.75
-    assert rel_error(t, ex, sc.spacing)[0] < 4e-3  # measured 0.18 %
+    assert rel_error(t, ex, sc.spacing)[0] < 4e-3  # measured 0.20 %
 
 
 def test_uniform_speed_scales_times():
@@ -158,9 +158,9 @@ def test_hole_is_routed_round_not_crossed():
     straight = np.linalg.norm(P[behind] - src[:2], axis=1)
     shadow = (np.abs(P[behind, 1] - 0.5) < 0.05) & (P[behind, 0] < 0.8)
     assert np.all(t[behind][shadow] > 1.01 * straight[shadow])
-    # Known weakness (docs/surface_front.md): front circles are carried a little way into a
-    # corner's shadow, so some cells behind the hole burn early: measured -5.4 %, +1.6 %.
-    assert -7e-2 < rel.min() and rel.max() < 2.5e-2
+    # Never through the hole (measured -0.23 %); late where the corners' cells sit off the
+    # corners themselves (measured +1.75 %).
+    assert -5e-3 < rel.min() and rel.max() < 3e-2
 
 
 # --- invariance ------------------------------------------------------------------------
@@ -177,7 +177,7 @@ def test_same_times_under_rigid_motion():
     # Ties in the sampling are broken alike in any pose except where rounding straddles a
     # tie (measured: 94 % of the cells land on the same points).
     assert same.mean() > 0.85
-    # where the other 6 % differ, times shift a little (measured 3e-4 relative at most)
+    # where the other 6 % differ, times shift a little (measured 2.2e-4 relative at most)
     np.testing.assert_allclose(tm[same], t[match][same], rtol=1e-3)
     ex_m = S.cylinder_exact(back, CYL_SRC)
     assert rel_error(tm, ex_m, scm.spacing)[0] < 3e-3  # as unmoved
@@ -204,7 +204,7 @@ def test_uv_seam_is_welded_and_does_not_block_the_fire():
     V, F = S.cylinder(nt=128, seam=True)
     t, sc = solve(V, F, CYL_SRC, 32)
     ex = S.cylinder_exact(sc.positions, CYL_SRC)
-    assert rel_error(t, ex, sc.spacing)[0] < 3e-3  # measured as without the seam, 0.15 %
+    assert rel_error(t, ex, sc.spacing)[0] < 3e-3  # measured as without the seam, 0.12 %
     # Unwelded, the seam is a cut: cells just across it burn only after the long way round.
     sc0 = SurfaceCells(V, F, cells=32, weld_tol=0.0)
     f0 = SurfaceFront(sc0)
@@ -247,7 +247,7 @@ def test_second_ignition_later_and_several_sources():
     front.advance(np.inf)
     np.testing.assert_array_equal(front.arrival, t_both)
     ex = np.minimum(S.sphere_exact(sc.positions, a), 0.5 + S.sphere_exact(sc.positions, b))
-    assert rel_error(front.arrival, ex, sc.spacing)[0] < 4e-2  # measured 1.8 % (the collision line)
+    assert rel_error(front.arrival, ex, sc.spacing)[0] < 2e-2  # measured 0.93 % (the collision line)
     with pytest.raises(ValueError, match="t0"):
         front.ignite(a, t0=0.1)
 
@@ -271,7 +271,7 @@ def test_cells_cover_the_area_uniformly_at_the_requested_resolution():
     area = 2 * np.pi * 0.1 * 0.3
     assert abs(len(sc) - 32 ** 2) <= 1
     assert sc.areas.sum() == pytest.approx(area * np.sin(np.pi / 64) / (np.pi / 64), rel=1e-9)
-    assert np.std(sc.areas) / np.mean(sc.areas) < 0.2  # measured 0.08
+    assert np.std(sc.areas) / np.mean(sc.areas) < 0.25  # measured 0.16
     np.testing.assert_allclose(np.linalg.norm(sc.normals, axis=1), 1.0)
     radial = sc.positions[:, :2] / np.linalg.norm(sc.positions[:, :2], axis=1)[:, None]
     assert np.all(np.abs(np.sum(sc.normals[:, :2] * radial, axis=1)) > 0.95)  # normals point out or in, all alike
