@@ -249,9 +249,10 @@ struct EdgeProblem {
 };
 
 double edge_value(const EdgeProblem& p, double lam) {
-  const Vec3 y = p.pa + lam * p.q, d1 = y - p.s, d2 = p.px - y;
+  const Vec3 y = p.pa + lam * p.q, d2 = p.px - y;
   const double leg = (d2.norm() - p.e.dot(d2)) / p.W;
   if (!p.factored) return p.Ta + lam * p.dT + leg;
+  const Vec3 d1 = y - p.s;
   return p.ts + (p.tau_a + lam * p.dtau) * (d1.norm() - p.e.dot(d1)) / p.W + leg;
 }
 
