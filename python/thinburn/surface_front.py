@@ -123,7 +123,7 @@ class SurfaceFront:
     """
 
     def __init__(self, cells: SurfaceCells, speed: SpeedLike = 1.0, drive=None,
-                 init_radius: float = 1.5):
+                 init_radius: float = 2.0):
         if not isinstance(cells, _core.SurfaceCells):
             raise TypeError(f"cells must be a SurfaceCells, got {type(cells).__name__}")
         r = real(init_radius, "init_radius", low=0.0, high=10.0)
