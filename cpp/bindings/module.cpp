@@ -10,4 +10,5 @@ PYBIND11_MODULE(_core, m) {
   thinburn::bind::define_heat(m);
   thinburn::bind::define_lattice(m);
   thinburn::bind::define_dynamics(m);
+  thinburn::bind::define_surface_front(m);
 }
