@@ -18,7 +18,7 @@ import numpy as np
 import bpy
 
 from . import cache
-from .fire import fire_object_name
+from .fire import fire_object_name, light_object_name
 from .nodes import (ensure_modifier, interface_socket, link, map_range, new_group, node, set_input,
                     socket, use_nodes)
 
@@ -238,8 +238,10 @@ def free_bake(obj) -> list:
                 bpy.data.materials.remove(mat)
             gone.append("material")
             break
-    fire = bpy.data.objects.get(fire_object_name(obj))
-    if fire is not None:
+    for name in (fire_object_name(obj), light_object_name(obj)):
+        fire = bpy.data.objects.get(name)
+        if fire is None:
+            continue
         fmd = fire.modifiers.get(CACHE_MODIFIER)
         if fmd is not None and fmd.filepath:
             paths.add(bpy.path.abspath(fmd.filepath))
@@ -247,7 +249,8 @@ def free_bake(obj) -> list:
         bpy.data.objects.remove(fire)
         if mesh is not None and mesh.users == 0:
             bpy.data.meshes.remove(mesh)
-        gone.append("fire particles")
+        if "fire particles" not in gone:
+            gone.append("fire particles")
     for path in sorted(paths):
         for p in (path, path + ".partial"):
             if os.path.exists(p):

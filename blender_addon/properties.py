@@ -76,6 +76,11 @@ def build_material(settings):
     return preset.with_(**changes)
 
 
+def _on_flame(self, context):
+    from . import fire  # bpy-heavy; imported when a flame setting changes
+    fire.sync_flame_settings(self.id_data)
+
+
 def _field_props():
     props = {}
     default = thinburn.MATERIALS["paper"]
@@ -169,6 +174,20 @@ class ThinBurnSettings(bpy.types.PropertyGroup):
     cache_dir: StringProperty(
         name="Cache Folder", default="//thinburn_cache/", subtype="DIR_PATH", options=RELATIVE_PATH,
         description="Folder of the bake's PC2 file; '//' means next to the .blend file")
+
+    flame_height: FloatProperty(
+        name="Flame Height", default=0.04, min=0.0, soft_max=0.5, subtype="DISTANCE", unit="LENGTH",
+        update=_on_flame, options=STATIC,
+        description="How far the flames reach above the hottest fire particles (the fire "
+                    "object's modifier input; changes the baked fire without a new bake)")
+    flame_intensity: FloatProperty(
+        name="Flame Intensity", default=1.0, min=0.0, soft_max=20.0, update=_on_flame, options=STATIC,
+        description="Brightness of the flames and of the light they cast on the sheet")
+    flame_temperature: FloatProperty(
+        name="Flame Temperature", default=1900.0, min=800.0, soft_max=4000.0, update=_on_flame,
+        options=STATIC,
+        description="Colour temperature of the hottest flames, kelvin: about 1200 is deep red, "
+                    "1900 orange, 2500 and above yellow-white")
 
     show_advanced: BoolProperty(name="Advanced", default=False, options=STATIC,
                                 description="Show the material and model parameters")

@@ -73,23 +73,38 @@ def test_manifest_and_bl_info(addon):
     assert callable(addon.register) and callable(addon.unregister)
 
 
-def test_fire_particles_become_an_emitting_point_cloud(addon, tmp_path):
-    """The output path for thinburn.Simulation.particles, fed with known particles."""
+def _modifier_input(obj, name):
+    md = obj.modifiers["ThinBurn Fire"]
+    ident = {s.name: s.identifier for s in md.node_group.interface.items_tree
+             if getattr(s, "in_out", "") == "INPUT"}
+    return md, ident[name]
+
+
+def test_fire_particles_become_flames_and_a_light(addon, tmp_path):
+    """The output path for thinburn.Simulation.particles, fed with known particles: the fire
+    object is a volume with density, tb_temperature and tb_flame grids; its Output 2 shows the
+    hot particles as points carrying the core's temperature; the light object is glowing
+    spheres hidden from the camera."""
     sheet = make_sheet()
     rng = np.random.default_rng(1)
     frames = []
-    for k in (3, 0, 5):  # K above ambient; below 150 K a particle is left out
+    for k in (3, 0, 5):  # K above ambient; below MIN_TEMPERATURE a particle is left out
         frames.append((rng.uniform(-0.1, 0.1, size=(k, 3)).astype(np.float32),
                        np.linspace(100.0, 900.0, k, dtype=np.float32)))
     pc2 = str(tmp_path / "Sheet.pc2")
     addon.fire.apply_particles(sheet, pc2, frames, frame_start=1.0)
     fire = bpy.data.objects["ThinBurn Fire Sheet"]
+    light = bpy.data.objects["ThinBurn Fire Light Sheet"]
+    assert not light.visible_camera and not light.visible_shadow and light.data is fire.data
     head, data = addon.cache.read_pc2(tmp_path / "Sheet_fire.pc2")
     assert head["points"] == 10 and head["samples"] == 3
+    md, output = _modifier_input(fire, "Output")
     for frame, (pos, temp) in enumerate(frames, start=1):
-        glowing = temp >= 150.0
+        glowing = temp >= addon.fire.MIN_TEMPERATURE
         pos, temp = pos[glowing], temp[glowing]
         bpy.context.scene.frame_set(frame)
+        md[output] = 2
+        fire.update_tag()
         dg = bpy.context.evaluated_depsgraph_get()
         geo = bpy.types.GeometrySet.from_evaluated_object(fire.evaluated_get(dg))
         cloud = geo.pointcloud
@@ -97,14 +112,28 @@ def test_fire_particles_become_an_emitting_point_cloud(addon, tmp_path):
         assert count == len(temp)
         if count:
             got_t = np.empty(count, dtype=np.float32)
-            cloud.attributes["temperature"].data.foreach_get("value", got_t)
+            cloud.attributes[addon.fire.ATTR_TEMPERATURE].data.foreach_get("value", got_t)
             got_p = np.empty(3 * count, dtype=np.float32)
             cloud.attributes["position"].data.foreach_get("vector", got_p)
             np.testing.assert_allclose(got_t, temp, rtol=1e-6)
             np.testing.assert_allclose(got_p.reshape(-1, 3), pos, atol=1e-6)
-            assert cloud.materials[0].name == "ThinBurn Fire"
-    assert addon.materials.free_bake(sheet)  # the fire object and its file go with the bake
+        md[output] = 0
+        fire.update_tag()
+        dg = bpy.context.evaluated_depsgraph_get()
+        geo = bpy.types.GeometrySet.from_evaluated_object(fire.evaluated_get(dg))
+        if count:
+            assert {g.name for g in geo.volume.grids} >= {"density", "tb_temperature", "tb_flame"}
+            assert geo.volume.materials[0].name == "ThinBurn Fire"
+        lgeo = bpy.types.GeometrySet.from_evaluated_object(light.evaluated_get(dg))
+        assert (lgeo.mesh is not None and len(lgeo.mesh.polygons) > 0) == bool(count)
+    # the panel's flame settings reach both modifiers
+    sheet.thinburn.flame_height = 0.1
+    for obj in (fire, light):
+        md, key = _modifier_input(obj, "Flame Height")
+        assert md[key] == pytest.approx(0.1)
+    assert addon.materials.free_bake(sheet)  # the fire objects and their file go with the bake
     assert "ThinBurn Fire Sheet" not in bpy.data.objects
+    assert "ThinBurn Fire Light Sheet" not in bpy.data.objects
     assert not (tmp_path / "Sheet_fire.pc2").exists()
 
 

@@ -81,3 +81,79 @@ def test_cycles_render_shows_char(addon, tmp_path):
     assert clean[centre].mean() > 0.3, "the unburnt sheet should render light"
     assert burnt[centre].mean() < 0.6 * clean[centre].mean(), (tmp_path, burnt[centre].mean())
     assert abs(burnt[corner].mean() - clean[corner].mean()) < 0.1 * clean[corner].mean()
+
+
+# --- the fire: tiny renders (64×48, 16 samples) measured pixel by pixel ----------------------
+FIRE_PX = (64, 48)
+
+
+def _render_rgb(path, frame):
+    scene = bpy.context.scene
+    scene.frame_set(frame)
+    scene.render.filepath = str(path)
+    bpy.ops.render.render(write_still=True)
+    img = bpy.data.images.load(str(path))
+    w, h = img.size
+    px = np.empty(w * h * 4, dtype=np.float32)
+    img.pixels.foreach_get(px)
+    bpy.data.images.remove(img)
+    return px.reshape(h, w, 4)[::-1, :, :3]
+
+
+def _fire_scene(tmp_path, size=0.2, frames=30):
+    """A burning sheet with its fire particles (Crumple on, on a floor), a top camera."""
+    sheet = make_sheet(n=17, size=size, z=0.0)
+    settings = setup_bake(sheet, frames=frames, cells=32, cache_dir=tmp_path / "cache")
+    settings.mat_V0 = 12.0  # mm/s: a wide ring of fire within a short bake
+    make_igniter(sheet, (0.0, 0.0, 0.0), lit_from=LIT_FROM, radius=0.03)
+    assert bpy.ops.thinburn.bake() == {"FINISHED"}
+    _camera_and_light(size)
+    scene = bpy.context.scene
+    scene.render.resolution_x, scene.render.resolution_y = FIRE_PX
+    scene.cycles.samples = 16
+    scene.cycles.volume_biased = True  # as docs/blender.md recommends for the flames
+    bpy.data.objects["Sun"].data.energy = 0.0  # only the fire lights the scene
+    return sheet
+
+
+def _annulus(h, w, r0, r1):
+    """Pixels whose distance from the image centre is in [r0, r1) (ortho scale 0.2 m / 64 px)."""
+    y, x = np.mgrid[0:h, 0:w]
+    r = np.hypot(x + 0.5 - w / 2, y + 0.5 - h / 2) * (0.2 / w)
+    return (r >= r0) & (r < r1)
+
+
+def test_fire_object_alone_glows_warm_at_the_burning_edge(addon, tmp_path):
+    sheet = _fire_scene(tmp_path)
+    fire = bpy.data.objects["ThinBurn Fire Sheet"]
+    assert fire.modifiers["ThinBurn Fire"].node_group is not None
+    sheet.hide_render = True  # the flames alone, over the 0.05 grey world
+    rgb = _render_rgb(tmp_path / "fire_alone.png", 30)
+    lum = rgb @ np.array([0.2126, 0.7152, 0.0722], dtype=np.float32)
+    h, w = lum.shape
+    background = float(np.median(lum[_annulus(h, w, 0.09, 1.0)]))  # beyond the sheet's corners
+    hot = lum > background + 0.1
+    print("fire alone: background", background, "hot pixels", int(hot.sum()),
+          "mean rgb there", rgb[hot].mean(axis=0))
+    # measured: background 0.247, 655 hot pixels of 3072, mean rgb there (0.95, 0.48, 0.25)
+    assert hot.sum() >= 200, (tmp_path, int(hot.sum()))
+    red, green, blue = rgb[hot].mean(axis=0)
+    assert red > 2.0 * blue and red > 1.3 * green, (tmp_path, red, green, blue)
+    assert lum[hot].mean() > background + 0.3, (tmp_path, lum[hot].mean())
+
+
+def test_flames_light_the_sheet(addon, tmp_path):
+    sheet = _fire_scene(tmp_path)
+    bpy.data.objects["ThinBurn Fire Sheet"].hide_render = True  # the light it casts, alone
+    light = bpy.data.objects["ThinBurn Fire Light Sheet"]
+    lit = _render_rgb(tmp_path / "lit.png", 30)
+    light.hide_render = True
+    dark = _render_rgb(tmp_path / "dark.png", 30)
+    h, w, _ = lit.shape
+    near = _annulus(h, w, 0.06, 0.08)  # unburnt paper just outside the ring of fire
+    warm, grey = lit[near].mean(axis=0), dark[near].mean(axis=0)
+    print("flame light: rgb near the fire", warm, "without the light", grey)
+    # measured: (0.47, 0.21, 0.16) lit against (0.22, 0.21, 0.20) unlit
+    assert warm[0] - grey[0] > 0.12, (tmp_path, warm, grey)
+    assert warm[0] > 1.5 * warm[2], (tmp_path, warm)
+    assert sheet.hide_render is False
