@@ -157,3 +157,68 @@ def test_flames_light_the_sheet(addon, tmp_path):
     assert warm[0] - grey[0] > 0.12, (tmp_path, warm, grey)
     assert warm[0] > 1.5 * warm[2], (tmp_path, warm)
     assert sheet.hide_render is False
+
+
+def _own_material_sheet(tmp_path, size=0.2):
+    sheet = make_sheet(n=17, size=size, z=0.0)
+    mat = bpy.data.materials.new("Blue Card")
+    bsdf = mat.node_tree.nodes["Principled BSDF"]
+    bsdf.inputs["Base Color"].default_value = (0.05, 0.2, 0.8, 1.0)
+    sheet.data.materials.append(mat)
+    settings = setup_bake(sheet, frames=48, cells=32, cache_dir=tmp_path / "cache")
+    settings.mat_burn_duration = BURN_S
+    settings.mat_duration_noise = 0.0
+    settings.crumple = False  # the shading, in the camera
+    make_igniter(sheet, (0.0, 0.0, 0.0), lit_from=LIT_FROM, radius=0.05)
+    assert bpy.ops.thinburn.bake() == {"FINISHED"}
+    _camera_and_light(size)
+    scene = bpy.context.scene
+    scene.render.resolution_x, scene.render.resolution_y = FIRE_PX
+    scene.cycles.samples = 8
+    return sheet, mat
+
+
+def test_own_material_chars_where_burnt_and_keeps_its_colour_elsewhere(addon, tmp_path):
+    sheet, mat = _own_material_sheet(tmp_path)
+    assert sheet.material_slots[0].material is mat  # the bake kept the material, and wrapped it
+    assert addon.materials.is_burn_wrapped(mat)
+    assert mat.node_tree.nodes["Principled BSDF"].inputs["Base Color"].default_value[2] == pytest.approx(0.8)
+    first = float(point_attribute(sheet, "thinburn_ignite_time").min())
+    frame = int(round(first + 0.5 * BURN_S * bpy.context.scene.render.fps))
+    clean = _render_rgb(tmp_path / "own_unburnt.png", LIT_FROM - 1)
+    burnt = _render_rgb(tmp_path / "own_burnt.png", frame)
+    h, w, _ = clean.shape
+    centre = _annulus(h, w, 0.0, 0.015)
+    corner = (slice(0, 6), slice(0, 8))
+    c0, c1 = clean[centre].mean(axis=0), burnt[centre].mean(axis=0)
+    k0, k1 = clean[corner].mean(axis=(0, 1)), burnt[corner].mean(axis=(0, 1))
+    # the ember band: the last 30 % of the centre's burn, before it burns through
+    glow = _render_rgb(tmp_path / "own_glow.png", int(round(first + 0.85 * BURN_S * 24)))[centre].mean(axis=0)
+    print("own material: centre", c0, "->", c1, "glowing", glow, "corner", k0, "->", k1)
+    # measured: centre (0.49, 0.63, 0.97) -> (0.21, 0.19, 0.18) charred, (1.0, 0.99, 0.18) glowing
+    # (saturated by the Standard view transform); corner unchanged
+    assert c0[2] > 1.5 * c0[0], "the unburnt card should render blue"
+    assert c1.sum() < 0.5 * c0.sum(), (tmp_path, c0, c1)             # charred
+    np.testing.assert_allclose(k1, k0, atol=0.05)                      # untouched, still blue
+    assert k1[2] > 1.5 * k1[0]
+    assert glow[0] > 2.0 * glow[2] and glow[0] > c1[0] + 0.2, (tmp_path, glow)  # a red-hot edge
+
+
+def test_add_burn_to_material_operator_wraps_once_and_free_unwraps(addon, tmp_path):
+    sheet = make_sheet()
+    mat = bpy.data.materials.new("Mine")
+    sheet.data.materials.append(mat)
+    out = mat.node_tree.nodes["Material Output"]
+    bsdf = mat.node_tree.nodes["Principled BSDF"]
+    assert bpy.ops.thinburn.add_burn_to_material() == {"FINISHED"}
+    assert bpy.ops.thinburn.add_burn_to_material() == {"FINISHED"}  # idempotent
+    wraps = [n for n in mat.node_tree.nodes if n.bl_idname == "ShaderNodeGroup"]
+    assert len(wraps) == 1
+    assert out.inputs["Surface"].links[0].from_node == wraps[0]
+    assert wraps[0].inputs["Shader"].links[0].from_node == bsdf
+    assert addon.materials.remove_burn_from_material(mat)
+    assert out.inputs["Surface"].links[0].from_node == bsdf
+    empty = make_sheet("Bare")
+    with pytest.raises(RuntimeError, match="no material slots"):
+        bpy.ops.thinburn.add_burn_to_material()
+    assert empty.name == "Bare"
