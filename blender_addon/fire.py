@@ -235,14 +235,15 @@ def fire_group():
 
 AMBIENT_K = 293.15      # the core's particle temperatures are kelvin above ambient
 FLAME_K = 900.0         # a particle's temperature at birth (the core's temperature0)
-FLAME_COLOR_K = 1900.0  # the colour temperature shown for a particle at FLAME_K
+FLAME_COLOR_K = 1700.0  # the colour temperature shown for a particle at FLAME_K
 FLAME_RADIUS = 0.010    # m, a flame puff around one particle
-FLAME_HEIGHT = 0.04     # m, a tongue's rise above a particle at FLAME_K
+FLAME_HEIGHT = 0.06     # m, a tongue's rise above a particle at FLAME_K
 VOXEL_SIZE = 0.0025     # m
-MIN_TEMPERATURE = 250.0  # K above ambient: cooler particles barely glow (weight < 0.006)
-STREAK = 4              # puffs per tongue, the particle's own included
-FLAME_STRENGTH = 150.0  # volume emission of a flame point at FLAME_K and Intensity 1
-LIGHT_STRENGTH = 2.0    # surface emission of a light sphere at FLAME_K and Intensity 1
+MIN_TEMPERATURE = 350.0  # K above ambient: cooler particles barely glow (weight < 0.03)
+STREAK = 5              # puffs per tongue, the particle's own included
+FLAME_STRENGTH = 100.0  # volume emission of a flame point at FLAME_K and Intensity 1
+LICK_SCALE = (60.0, 60.0, 20.0)  # 1/m: the noise that shapes the tongues
+LIGHT_STRENGTH = 1.0    # surface emission of a light sphere at FLAME_K and Intensity 1
 
 
 def _emission(tree, x, strength, camera_only):
@@ -282,9 +283,25 @@ def fire_material():
     tree.nodes.clear()
     emit = _emission(tree, 0, FLAME_STRENGTH, camera_only=True)
     dens = node(tree, "ShaderNodeAttribute", -800, -550, attribute_type="GEOMETRY", attribute_name="density")
+    # licks: a noise stretched upwards breaks the glow into tongues
+    where = node(tree, "ShaderNodeTexCoord", -1400, -800)
+    stretch = node(tree, "ShaderNodeVectorMath", -1200, -800, operation="MULTIPLY")
+    tree.links.new(where.outputs["Object"], stretch.inputs[0])
+    stretch.inputs[1].default_value = LICK_SCALE
+    noise = node(tree, "ShaderNodeTexNoise", -1000, -800)
+    tree.links.new(stretch.outputs[0], noise.inputs["Vector"])
+    set_input(noise, "Scale", 1.0)
+    set_input(noise, "Detail", 3.0)
+    licks = node(tree, "ShaderNodeMapRange", -800, -800, clamp=True, interpolation_type="SMOOTHSTEP")
+    tree.links.new(noise.outputs["Fac"], licks.inputs["Value"])
+    set_input(licks, "From Min", 0.35)
+    set_input(licks, "From Max", 0.65)
+    shaped = node(tree, "ShaderNodeMath", -550, -650, operation="MULTIPLY")
+    tree.links.new(dens.outputs["Fac"], shaped.inputs[0])
+    tree.links.new(licks.outputs["Result"], shaped.inputs[1])
     mul = node(tree, "ShaderNodeMath", -350, -450, operation="MULTIPLY")
     tree.links.new(emit.inputs["Strength"].links[0].from_socket, mul.inputs[0])
-    tree.links.new(dens.outputs["Fac"], mul.inputs[1])
+    tree.links.new(shaped.outputs[0], mul.inputs[1])
     tree.links.new(mul.outputs[0], emit.inputs["Strength"])
     out = node(tree, "ShaderNodeOutputMaterial", 200, 0)
     tree.links.new(emit.outputs[0], out.inputs["Volume"])
@@ -377,6 +394,144 @@ def _particle_object(obj, name, mesh, path, frame_start, output, material):
     return fire, gn, ident
 
 
+# --- embers -------------------------------------------------------------------------------------
+EMBER_GROUP_MATERIAL = "ThinBurn Ember"
+EMBER_CHANCE = 0.02    # per hot particle and frame, at Embers = 1
+EMBER_K = 1000.0       # K above ambient at birth: a bright orange spark
+EMBER_COOLING = 1.2    # 1/s: T falls to 1/e in 0.8 s
+EMBER_LIFETIME = (0.8, 2.0)  # s
+EMBER_BUOYANCY = 3.0   # m/s² at EMBER_K, upwards; gravity pulls 9.81 * EMBER_WEIGHT down
+EMBER_WEIGHT = 0.15
+EMBER_DRAG = 2.0       # 1/s
+EMBER_KICK = 0.25      # m/s, rms of a spark's initial velocity
+EMBER_FLUTTER = 0.3    # m/s², rms of the random push each frame
+EMBER_RADIUS = 0.0010  # m
+
+
+def ember_object_name(obj) -> str:
+    return f"ThinBurn Embers {obj.name}"
+
+
+def ember_frames(frames, dt: float, seed: int = 0, amount: float = 1.0, wind=(0.0, 0.0, 0.0)):
+    """Sparks thrown off by the fire: [(positions (k, 3), temperatures (k,))] per frame.
+
+    Each frame, every fire particle hotter than 0.6 T0 (young: it left the burning edge within
+    about 60 ms) throws a spark with probability EMBER_CHANCE * amount. A spark starts at its
+    particle, kicked in a random direction, rises by buoyancy against a little weight and drag,
+    flutters, cools exponentially and dies at the end of its lifetime or below 150 K above
+    ambient. Deterministic: the same particles, dt and seed give the same sparks. Each live
+    spark keeps its slot (its index in the frame's arrays) for its whole life; a dead slot is
+    reused, so the arrays are padded to the number of slots with temperature 0 (dead)."""
+    rng = np.random.default_rng([int(seed), 0xE3BE])
+    wind = np.asarray(wind, dtype=np.float64)
+    pos = np.zeros((0, 3))
+    vel = np.zeros((0, 3))
+    temp = np.zeros(0)
+    life = np.zeros(0)
+    out = []
+    for ppos, ptemp in frames:
+        ppos = np.asarray(ppos, dtype=np.float64).reshape(-1, 3)
+        ptemp = np.asarray(ptemp, dtype=np.float64).reshape(-1)
+        # move and cool the live sparks over the frame
+        alive = temp > 0
+        if alive.any():
+            lift = EMBER_BUOYANCY * temp[alive] / EMBER_K - 9.81 * EMBER_WEIGHT
+            acc = -EMBER_DRAG * (vel[alive] - wind)
+            acc[:, 2] += lift
+            acc += EMBER_FLUTTER * rng.standard_normal((int(alive.sum()), 3))
+            vel[alive] += acc * dt
+            pos[alive] += vel[alive] * dt
+            temp[alive] *= np.exp(-EMBER_COOLING * dt)
+            life[alive] -= dt
+            dead = alive & ((life <= 0) | (temp < 150.0))
+            temp[dead] = 0.0
+        # births from the young fire particles
+        young = np.flatnonzero(ptemp > 0.6 * FLAME_K)
+        draw = rng.random(len(young))
+        born = young[draw < EMBER_CHANCE * amount]
+        free = np.flatnonzero(temp <= 0)
+        extra = len(born) - len(free)
+        if extra > 0:
+            pos = np.vstack([pos, np.zeros((extra, 3))])
+            vel = np.vstack([vel, np.zeros((extra, 3))])
+            temp = np.concatenate([temp, np.zeros(extra)])
+            life = np.concatenate([life, np.zeros(extra)])
+            free = np.flatnonzero(temp <= 0)
+        slots = free[:len(born)]
+        pos[slots] = ppos[born]
+        kick = EMBER_KICK * rng.standard_normal((len(born), 3))
+        kick[:, 2] = np.abs(kick[:, 2]) + 0.5 * EMBER_KICK  # thrown up and out
+        vel[slots] = kick
+        temp[slots] = EMBER_K
+        life[slots] = rng.uniform(*EMBER_LIFETIME, size=len(born))
+        out.append((pos.astype(np.float32), temp.astype(np.float32)))
+    return out
+
+
+def ember_material():
+    """"ThinBurn Ember": blackbody emission of the spark's temperature, ~ (T / EMBER_K)^4."""
+    mat = bpy.data.materials.get(EMBER_GROUP_MATERIAL)
+    if mat is not None:
+        return mat
+    mat = bpy.data.materials.new(EMBER_GROUP_MATERIAL)
+    use_nodes(mat)
+    tree = mat.node_tree
+    tree.nodes.clear()
+    temp = node(tree, "ShaderNodeAttribute", -800, 0, attribute_type="GEOMETRY",
+                attribute_name=ATTR_TEMPERATURE)
+    kelvin = node(tree, "ShaderNodeMath", -550, 150, operation="ADD")
+    tree.links.new(temp.outputs["Fac"], kelvin.inputs[0])
+    kelvin.inputs[1].default_value = AMBIENT_K
+    body = node(tree, "ShaderNodeBlackbody", -350, 150)
+    tree.links.new(kelvin.outputs[0], body.inputs["Temperature"])
+    ratio = node(tree, "ShaderNodeMath", -550, -100, operation="DIVIDE")
+    tree.links.new(temp.outputs["Fac"], ratio.inputs[0])
+    ratio.inputs[1].default_value = EMBER_K
+    power = node(tree, "ShaderNodeMath", -350, -100, operation="POWER")
+    tree.links.new(ratio.outputs[0], power.inputs[0])
+    power.inputs[1].default_value = 4.0
+    scale = node(tree, "ShaderNodeMath", -150, -100, operation="MULTIPLY")
+    tree.links.new(power.outputs[0], scale.inputs[0])
+    scale.inputs[1].default_value = 40.0
+    emit = node(tree, "ShaderNodeEmission", 50, 50)
+    tree.links.new(body.outputs[0], emit.inputs["Color"])
+    tree.links.new(scale.outputs[0], emit.inputs["Strength"])
+    out = node(tree, "ShaderNodeOutputMaterial", 250, 0)
+    tree.links.new(emit.outputs[0], out.inputs["Surface"])
+    return mat
+
+
+def apply_embers(obj, sheet_pc2_path: str, frames, frame_start: float) -> None:
+    """Sparks from the baked fire particles: "ThinBurn Embers <sheet>", its own PC2 and a
+    point cloud (the "ThinBurn Fire" group's point output) that glows by temperature."""
+    settings = getattr(obj, "thinburn", None)
+    amount = float(getattr(settings, "embers", 1.0))
+    seed = int(getattr(settings, "seed", 0))
+    scene = bpy.context.scene
+    dt = scene.render.fps_base / scene.render.fps
+    sparks = ember_frames(frames, dt, seed=seed, amount=amount)
+    name = ember_object_name(obj)
+    old = bpy.data.objects.get(name)
+    if amount <= 0.0 or not any(len(t) for _, t in sparks):
+        if old is not None:
+            bpy.data.objects.remove(old)
+        return
+    count, rows = particle_cache_rows(sparks)
+    abs_path = bpy.path.abspath(sheet_pc2_path)[:-len(".pc2")] + "_embers.pc2"
+    with cache.PC2Writer(abs_path, 2 * count, start_frame=frame_start) as writer:
+        for sample in rows:
+            writer.append(sample)
+    mesh = old.data if old is not None and old.type == "MESH" else None
+    if mesh is None or len(mesh.vertices) != 2 * count:
+        mesh = bpy.data.meshes.new(name)
+        mesh.vertices.add(2 * count)
+    path = sheet_pc2_path[:-len(".pc2")] + "_embers.pc2"
+    embers, gn, ident = _particle_object(obj, name, mesh, path, frame_start, 2, ember_material())
+    gn[ident["Count"]] = count
+    gn[ident["Radius"]] = EMBER_RADIUS
+    gn[ident["Min Temperature"]] = 1.0  # dead slots have 0
+
+
 def apply_particles(obj, sheet_pc2_path: str, frames, frame_start: float) -> None:
     """Write the fire particles to their own PC2, the flame object "ThinBurn Fire <sheet>"
     and the camera-invisible "ThinBurn Fire Light <sheet>" that lights the scene."""
@@ -398,6 +553,7 @@ def apply_particles(obj, sheet_pc2_path: str, frames, frame_start: float) -> Non
     light, gn, ident = _particle_object(obj, light_object_name(obj), mesh, path, frame_start, 1,
                                         light_material())
     gn[ident["Count"]] = count
+    apply_embers(obj, sheet_pc2_path, frames, frame_start)
     light.visible_camera = False
     light.visible_glossy = False
     light.visible_transmission = False

@@ -18,7 +18,7 @@ import numpy as np
 import bpy
 
 from . import cache
-from .fire import fire_object_name, light_object_name
+from .fire import ember_object_name, fire_object_name, light_object_name
 from .nodes import (ensure_modifier, interface_socket, link, map_range, new_group, node, set_input,
                     socket, use_nodes)
 
@@ -392,7 +392,7 @@ def free_bake(obj) -> list:
                 bpy.data.materials.remove(mat)
             gone.append("material")
             break
-    for name in (fire_object_name(obj), light_object_name(obj)):
+    for name in (fire_object_name(obj), light_object_name(obj), ember_object_name(obj)):
         fire = bpy.data.objects.get(name)
         if fire is None:
             continue

@@ -176,7 +176,7 @@ class ThinBurnSettings(bpy.types.PropertyGroup):
         description="Folder of the bake's PC2 file; '//' means next to the .blend file")
 
     flame_height: FloatProperty(
-        name="Flame Height", default=0.04, min=0.0, soft_max=0.5, subtype="DISTANCE", unit="LENGTH",
+        name="Flame Height", default=0.06, min=0.0, soft_max=0.5, subtype="DISTANCE", unit="LENGTH",
         update=_on_flame, options=STATIC,
         description="How far the flames reach above the hottest fire particles (the fire "
                     "object's modifier input; changes the baked fire without a new bake)")
@@ -184,10 +184,14 @@ class ThinBurnSettings(bpy.types.PropertyGroup):
         name="Flame Intensity", default=1.0, min=0.0, soft_max=20.0, update=_on_flame, options=STATIC,
         description="Brightness of the flames and of the light they cast on the sheet")
     flame_temperature: FloatProperty(
-        name="Flame Temperature", default=1900.0, min=800.0, soft_max=4000.0, update=_on_flame,
+        name="Flame Temperature", default=1700.0, min=800.0, soft_max=4000.0, update=_on_flame,
         options=STATIC,
         description="Colour temperature of the hottest flames, kelvin: about 1200 is deep red, "
-                    "1900 orange, 2500 and above yellow-white")
+                    "1700 orange, 2500 and above yellow-white")
+
+    embers: FloatProperty(
+        name="Embers", default=1.0, min=0.0, soft_max=10.0, options=STATIC,
+        description="How many sparks the fire throws off (0: none); read by the bake")
 
     show_advanced: BoolProperty(name="Advanced", default=False, options=STATIC,
                                 description="Show the material and model parameters")

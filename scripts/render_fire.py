@@ -58,6 +58,7 @@ def build_scene(cache: Path, size: float, n: int, frames: int, own_material: boo
     s.cache_dir = str(cache)
     s.floor_mode, s.floor_height = "HEIGHT", 0.0
     s.mat_burn_duration = 3.0
+    s.crumple_gain = 0.3  # a gentler curl keeps the ring of fire in view
     s.mat_V0 = 12.0  # mm/s: a faster front than paper's 3.5, so a short bake shows a wide ring
     coll = bpy.data.collections.new("Igniters")
     scene.collection.children.link(coll)
@@ -80,8 +81,8 @@ def camera_and_world(size: float, width: int, samples: int):
     import bpy
     scene = bpy.context.scene
     cam = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
-    cam.location = (0.0, -1.25 * size, 0.75 * size)
-    cam.rotation_euler = (math.radians(62), 0.0, 0.0)
+    cam.location = (0.0, -1.1 * size, 0.9 * size)
+    cam.rotation_euler = (math.radians(52), 0.0, 0.0)
     cam.data.lens = 32
     scene.collection.objects.link(cam)
     scene.camera = cam
@@ -113,6 +114,10 @@ def main(argv=None) -> int:
     ap.add_argument("--own-material", action="store_true",
                     help="give the sheet its own Principled BSDF before the bake")
     ap.add_argument("--name", default="blender_fire")
+    ap.add_argument("--view", default="Standard",
+                    help="the scene's view transform (AgX, Blender's default, shows the flames paler)")
+    ap.add_argument("--looks", nargs="*", default=[],
+                    help="extra looks as intensity:kelvin:height, rendered per frame (look-dev)")
     args = ap.parse_args(argv)
     args.out.mkdir(parents=True, exist_ok=True)
     user = Path(tempfile.mkdtemp(prefix="thinburn-render-"))
@@ -123,12 +128,20 @@ def main(argv=None) -> int:
         sheet = build_scene(user / "cache", size, 49, max(args.frames), args.own_material)
         bpy.ops.thinburn.bake()
         camera_and_world(size, args.width, args.samples)
+        bpy.context.scene.view_settings.view_transform = args.view
+        looks = [None] + [tuple(float(v) for v in look.split(":")) for look in args.looks]
         for frame in args.frames:
             bpy.context.scene.frame_set(frame)
-            path = args.out / f"{args.name}_{frame:03d}.png"
-            bpy.context.scene.render.filepath = str(path)
-            bpy.ops.render.render(write_still=True)
-            print("wrote", path)
+            for look in looks:
+                tag = ""
+                if look is not None:
+                    s = sheet.thinburn
+                    s.flame_intensity, s.flame_temperature, s.flame_height = look
+                    tag = "_" + "_".join(f"{v:g}" for v in look)
+                path = args.out / f"{args.name}_{frame:03d}{tag}.png"
+                bpy.context.scene.render.filepath = str(path)
+                bpy.ops.render.render(write_still=True)
+                print("wrote", path)
         del sheet
     finally:
         shutil.rmtree(user, ignore_errors=True)

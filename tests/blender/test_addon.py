@@ -191,5 +191,42 @@ def test_panels_draw_existing_properties_and_operators(addon):
             cls.draw(fake, ctx)
     for name in ("enabled", "material", "cells", "lattice", "igniter_collection", "pin_group",
                  "frame_start", "frame_end", "cache_dir", "thinburn.bake", "thinburn.free_bake",
-                 "mat_V0", "v_floor", "strength", "radius"):
+                 "mat_V0", "v_floor", "strength", "radius", "flame_height", "flame_intensity",
+                 "flame_temperature", "embers", "thinburn.add_burn_to_material"):
         assert name in drawn, name
+
+
+def test_embers_rise_cool_and_die_deterministically(addon):
+    """ember_frames, fed with a steady line of fire particles: sparks are born at the fire,
+    rise, cool and die; the same input and seed give the same sparks."""
+    rng = np.random.default_rng(3)
+    frames = []
+    for _ in range(48):
+        pos = np.c_[rng.uniform(-0.1, 0.1, 200), np.zeros(200), np.zeros(200)]
+        frames.append((pos.astype(np.float32), np.full(200, 850.0, np.float32)))
+    sparks = addon.fire.ember_frames(frames, 1 / 24, seed=5)
+    again = addon.fire.ember_frames(frames, 1 / 24, seed=5)
+    other = addon.fire.ember_frames(frames, 1 / 24, seed=6)
+    for (p, t), (q, u) in zip(sparks, again):
+        np.testing.assert_array_equal(p, q)
+        np.testing.assert_array_equal(t, u)
+    assert any(len(t) != len(u) or not np.array_equal(t, u) for (_, t), (_, u) in zip(sparks, other))
+    # follow slot 0 from the first frame with a live spark
+    start = next(i for i, (_, t) in enumerate(sparks) if len(t) and t[0] > 0)
+    life = [(sparks[i][0][0], sparks[i][1][0]) for i in range(start, len(sparks))
+            if len(sparks[i][1]) and sparks[i][1][0] > 0]
+    born_at = sparks[start][0][0]
+    assert abs(born_at[2]) < 1e-6 and abs(born_at[1]) < 1e-6  # on the line of fire
+    seen = 1
+    for (p0, t0), (p1, t1) in zip(life, life[1:]):
+        if t1 > t0:  # the slot was reused by a new spark
+            break
+        seen += 1
+    assert seen >= 10  # lives of 0.8 s and more: 19 frames at 24 fps
+    heights = [p[2] for p, _ in life[:seen]]
+    temps = [t for _, t in life[:seen]]
+    assert heights[-1] > 0.05, heights  # it rose
+    assert temps[-1] < 0.7 * temps[0]   # and cooled
+    alive = [int((t > 0).sum()) for _, t in sparks]
+    # about 200 young particles * 0.02 = 4 sparks a frame living ~1.4 s: 100-150 at once
+    assert 40 < alive[-1] < 300, alive[-1]
