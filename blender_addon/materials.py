@@ -56,6 +56,8 @@ def char_group():
     interface_socket(tree, "Char Point", "INPUT", "NodeSocketFloat", CHAR_POINT, 0.01, 1.0,
         desc="Share of the burn after which the material is fully charred")
     interface_socket(tree, "Roughness", "INPUT", "NodeSocketFloat", 0.9, 0.0, 1.0)
+    interface_socket(tree, "Burn Through", "INPUT", "NodeSocketFloat", 1.0, 0.0, 1.0,
+        desc="1: burnt-out areas become holes; 0: they stay as char (ash)")
 
     gi = node(tree, "NodeGroupInput", -900, 0)
     go = node(tree, "NodeGroupOutput", 700, 0)
@@ -92,8 +94,14 @@ def char_group():
     tree.links.new(bsdf.outputs[0], add.inputs[0])
     tree.links.new(emit.outputs[0], add.inputs[1])
     clear = node(tree, "ShaderNodeBsdfTransparent", 400, -150)
+    keep = node(tree, "ShaderNodeMath", 400, -300, operation="SUBTRACT")  # 1 - Burn Through
+    keep.inputs[0].default_value = 1.0
+    tree.links.new(gi.outputs["Burn Through"], keep.inputs[1])
+    solid = node(tree, "ShaderNodeMath", 550, -300, operation="MAXIMUM")
+    tree.links.new(alive.outputs[0], solid.inputs[0])
+    tree.links.new(keep.outputs[0], solid.inputs[1])
     out = node(tree, "ShaderNodeMixShader", 550, 0)
-    tree.links.new(alive.outputs[0], out.inputs[0])
+    tree.links.new(solid.outputs[0], out.inputs[0])
     tree.links.new(clear.outputs[0], out.inputs[1])
     tree.links.new(add.outputs[0], out.inputs[2])
     tree.links.new(out.outputs[0], go.inputs["Shader"])
@@ -252,6 +260,27 @@ def burn_materials(obj) -> list:
     return [(i, add_burn_to_material(slot.material)) for i, slot in enumerate(obj.material_slots)]
 
 
+def sync_burnt(obj) -> None:
+    """Apply the sheet's *Burnt* setting (holes or ash) to its bake: the "ThinBurn Burn"
+    modifier's Remove Burnt and the Burn Through input of its burn nodes."""
+    settings = getattr(obj, "thinburn", None)
+    through = getattr(settings, "burnt", "HOLES") != "ASH"
+    md = obj.modifiers.get(BURN_MODIFIER)
+    if md is not None and md.node_group is not None:
+        for item in md.node_group.interface.items_tree:
+            if getattr(item, "in_out", "") == "INPUT" and item.name == "Remove Burnt":
+                md[item.identifier] = through
+    for slot in obj.material_slots:
+        mat = slot.material
+        if mat is None or mat.node_tree is None:
+            continue
+        for n in mat.node_tree.nodes:
+            if n.bl_idname == "ShaderNodeGroup" and n.node_tree is not None \
+                    and n.node_tree.name in (CHAR_GROUP, WRAP_GROUP) and "Burn Through" in n.inputs:
+                n.inputs["Burn Through"].default_value = 1.0 if through else 0.0
+    obj.update_tag()
+
+
 # --- the geometry-nodes group after the cache ---------------------------------------------------
 def burn_group():
     """Geometry node group "ThinBurn Burn": viewport char colour and removal of burnt faces."""
@@ -359,6 +388,7 @@ def apply_bake(obj, pc2_path: str, frame_start: float, ignite, burnout) -> None:
             obj.data.materials.append(mat)
     else:
         burn_materials(obj)  # the sheet's own materials char, glow and burn through too
+    sync_burnt(obj)
     obj.update_tag()
     mesh.update()
 

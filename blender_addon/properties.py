@@ -81,6 +81,11 @@ def _on_flame(self, context):
     fire.sync_flame_settings(self.id_data)
 
 
+def _on_burnt(self, context):
+    from . import materials
+    materials.sync_burnt(self.id_data)
+
+
 def _field_props():
     props = {}
     default = thinburn.MATERIALS["paper"]
@@ -189,6 +194,11 @@ class ThinBurnSettings(bpy.types.PropertyGroup):
         description="Colour temperature of the hottest flames, kelvin: about 1200 is deep red, "
                     "1700 orange, 2500 and above yellow-white")
 
+    burnt: EnumProperty(
+        name="Burnt", default="HOLES", update=_on_burnt, options=STATIC,
+        description="What burnt-out parts of the sheet become (changes the bake without a new one)",
+        items=[("HOLES", "Burn Through", "Burnt-out areas become holes (the default)", 0),
+               ("ASH", "Char (Ash)", "Burnt-out areas stay as black char, and keep their shape", 1)])
     embers: FloatProperty(
         name="Embers", default=1.0, min=0.0, soft_max=10.0, options=STATIC,
         description="How many sparks the fire throws off (0: none); read by the bake")

@@ -166,7 +166,7 @@ def _own_material_sheet(tmp_path, size=0.2):
     bsdf = mat.node_tree.nodes["Principled BSDF"]
     bsdf.inputs["Base Color"].default_value = (0.05, 0.2, 0.8, 1.0)
     sheet.data.materials.append(mat)
-    settings = setup_bake(sheet, frames=48, cells=32, cache_dir=tmp_path / "cache")
+    settings = setup_bake(sheet, frames=64, cells=32, cache_dir=tmp_path / "cache")
     settings.mat_burn_duration = BURN_S
     settings.mat_duration_noise = 0.0
     settings.crumple = False  # the shading, in the camera
@@ -247,3 +247,28 @@ def test_embers_exist_and_move_between_frames(addon, tmp_path):
     assert len(a) >= 8 and len(b) >= 8, (len(a), len(b))
     assert a.shape != b.shape or not np.allclose(a, b)
     assert b[:, 2].max() > 0.02  # sparks rise above the sheet (at z = 0)
+
+
+def test_ash_keeps_burnt_areas_as_char_instead_of_holes(addon, tmp_path):
+    sheet, mat = _own_material_sheet(tmp_path)
+    first = float(point_attribute(sheet, "thinburn_ignite_time").min())
+    frame = int(round(first + 1.2 * BURN_S * 24))  # the centre has burnt out
+    assert frame <= 64
+    faces = len(sheet.data.polygons)
+    bpy.context.scene.world.node_tree.nodes["Background"].inputs["Color"].default_value = (0.0, 0.3, 0.0, 1.0)
+    holes = _render_rgb(tmp_path / "holes.png", frame)
+    dg = bpy.context.evaluated_depsgraph_get()
+    assert len(sheet.evaluated_get(dg).to_mesh().polygons) < faces
+    sheet.evaluated_get(dg).to_mesh_clear()
+    sheet.thinburn.burnt = "ASH"
+    ash = _render_rgb(tmp_path / "ash.png", frame)
+    dg = bpy.context.evaluated_depsgraph_get()
+    assert len(sheet.evaluated_get(dg).to_mesh().polygons) == faces
+    sheet.evaluated_get(dg).to_mesh_clear()
+    h, w, _ = ash.shape
+    centre = _annulus(h, w, 0.0, 0.015)
+    through, char = holes[centre].mean(axis=0), ash[centre].mean(axis=0)
+    print("ash: centre rgb with holes", through, "as ash", char)
+    # measured: holes (0, 0.58, 0): the green world shows through; ash (0.20, 0.22, 0.17)
+    assert through[1] > 0.4 and through[0] < 0.1, (tmp_path, through)
+    assert char[1] < 0.35 and abs(char[1] - char[0]) < 0.1, (tmp_path, char)  # black char stays
