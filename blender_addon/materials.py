@@ -29,6 +29,7 @@ CHAR_GROUP = "ThinBurn Char"
 ATTR_IGNITE = "thinburn_ignite_time"
 ATTR_BURNOUT = "thinburn_burnout_time"
 ATTR_CHAR = "thinburn_char"
+ATTR_BURNING = "thinburn_burning"  # 1 on the burning band this frame (Mantaflow's emitter)
 PAPER = (0.85, 0.80, 0.70, 1.0)
 CHAR = (0.02, 0.015, 0.01, 1.0)
 EMBER = (1.0, 0.35, 0.05, 1.0)
@@ -316,9 +317,21 @@ def burn_group():
     tree.links.new(ember.outputs[0], socket(colour.inputs, "Factor_Float"))
     link(tree, charred, "Result_Color", colour, "A_Color")
     set_input(colour, "B_Color", EMBER)
+    # the burning band (lit, not burnt out) for a Mantaflow flow source: written into the
+    # vertex group of that name when the sheet has one (mantaflow.py), else an attribute
+    lit = node(tree, "FunctionNodeCompare", -750, -300, data_type="FLOAT", operation="GREATER_EQUAL")
+    link(tree, now, "Frame", lit, "A")
+    link(tree, ig, "Attribute", lit, "B")
+    band = node(tree, "FunctionNodeBooleanMath", -550, -300, operation="AND")
+    tree.links.new(lit.outputs[0], band.inputs[0])
+    tree.links.new(alive.outputs[0], band.inputs[1])
+    burning = node(tree, "GeometryNodeStoreNamedAttribute", -100, -300, data_type="FLOAT", domain="POINT")
+    set_input(burning, "Name", ATTR_BURNING)
+    link(tree, gi, "Geometry", burning, "Geometry")
+    tree.links.new(band.outputs[0], socket(burning.inputs, "Value"))
     store = node(tree, "GeometryNodeStoreNamedAttribute", 100, 0, data_type="FLOAT_COLOR", domain="POINT")
     set_input(store, "Name", ATTR_CHAR)
-    link(tree, gi, "Geometry", store, "Geometry")
+    link(tree, burning, "Geometry", store, "Geometry")
     link(tree, colour, "Result_Color", store, "Value")
     # A face goes only when all its vertices burnt out: capture the test on points, then read
     # it on faces (a boolean is true on a face when true on all its points).
