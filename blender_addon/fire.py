@@ -63,12 +63,32 @@ def _inputs(tree):
     interface_socket(tree, "Geometry", "OUTPUT", "NodeSocketGeometry")
 
 
+VERSION = 2  # of the groups and materials below; older ones (from an earlier add-on) are renamed
+
+
+def _current(collection, name):
+    """The datablock `name` if it is of this VERSION; an older one is renamed out of the way
+    (objects still using it keep it) so that a fresh one is built."""
+    block = collection.get(name)
+    if block is not None and block.get("thinburn_version", 1) < VERSION:
+        block.name = f"{name} (old)"
+        block = None
+    return block
+
+
+def _stamp(block):
+    block["thinburn_version"] = VERSION
+    return block
+
+
 def fire_group():
     """Geometry node group "ThinBurn Fire" (see the module docstring). Point i < Count of the
     cached mesh is particle i's position; point Count + i carries (temperature, alive, 0)."""
-    tree, fresh = new_group(FIRE_GROUP, "GeometryNodeTree")
-    if not fresh:
+    tree = _current(bpy.data.node_groups, FIRE_GROUP)
+    if tree is not None:
         return tree
+    tree, _ = new_group(FIRE_GROUP, "GeometryNodeTree")
+    _stamp(tree)
     _inputs(tree)
     L = tree.links.new
     gi = node(tree, "NodeGroupInput", -1600, 0)
@@ -274,10 +294,10 @@ def fire_material():
     """"ThinBurn Fire": the flame volume. Emission of the colour temperature tb_temperature,
     strength tb_flame (Intensity * (T / T0)^4) * density, shown to the camera only (the light
     object casts the flames' light)."""
-    mat = bpy.data.materials.get(FIRE_MATERIAL)
+    mat = _current(bpy.data.materials, FIRE_MATERIAL)
     if mat is not None:
         return mat
-    mat = bpy.data.materials.new(FIRE_MATERIAL)
+    mat = _stamp(bpy.data.materials.new(FIRE_MATERIAL))
     use_nodes(mat)
     tree = mat.node_tree
     tree.nodes.clear()
@@ -312,10 +332,10 @@ def fire_material():
 
 def light_material():
     """"ThinBurn Fire Light": the glowing spheres of the light object."""
-    mat = bpy.data.materials.get(LIGHT_MATERIAL)
+    mat = _current(bpy.data.materials, LIGHT_MATERIAL)
     if mat is not None:
         return mat
-    mat = bpy.data.materials.new(LIGHT_MATERIAL)
+    mat = _stamp(bpy.data.materials.new(LIGHT_MATERIAL))
     use_nodes(mat)
     tree = mat.node_tree
     tree.nodes.clear()
@@ -470,10 +490,10 @@ def ember_frames(frames, dt: float, seed: int = 0, amount: float = 1.0, wind=(0.
 
 def ember_material():
     """"ThinBurn Ember": blackbody emission of the spark's temperature, ~ (T / EMBER_K)^4."""
-    mat = bpy.data.materials.get(EMBER_GROUP_MATERIAL)
+    mat = _current(bpy.data.materials, EMBER_GROUP_MATERIAL)
     if mat is not None:
         return mat
-    mat = bpy.data.materials.new(EMBER_GROUP_MATERIAL)
+    mat = _stamp(bpy.data.materials.new(EMBER_GROUP_MATERIAL))
     use_nodes(mat)
     tree = mat.node_tree
     tree.nodes.clear()

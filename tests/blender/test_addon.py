@@ -230,3 +230,19 @@ def test_embers_rise_cool_and_die_deterministically(addon):
     alive = [int((t > 0).sum()) for _, t in sparks]
     # about 200 young particles * 0.02 = 4 sparks a frame living ~1.4 s: 100-150 at once
     assert 40 < alive[-1] < 300, alive[-1]
+
+
+def test_a_fire_group_and_material_from_an_older_add_on_are_replaced(addon, tmp_path):
+    """A .blend baked with the first add-on has a "ThinBurn Fire" group without the Output
+    input and a material reading `temperature`; a new bake must not reuse them."""
+    old_group = bpy.data.node_groups.new("ThinBurn Fire", "GeometryNodeTree")
+    old_mat = bpy.data.materials.new("ThinBurn Fire")
+    sheet = make_sheet()
+    frames = [(np.zeros((2, 3), np.float32), np.full(2, 800.0, np.float32))]
+    addon.fire.apply_particles(sheet, str(tmp_path / "Sheet.pc2"), frames, frame_start=1.0)
+    fire = bpy.data.objects["ThinBurn Fire Sheet"]
+    md = fire.modifiers["ThinBurn Fire"]
+    assert md.node_group is not old_group and old_group.name == "ThinBurn Fire (old)"
+    assert md.node_group.name == "ThinBurn Fire"
+    assert old_mat.name == "ThinBurn Fire (old)"
+    assert addon.fire.fire_material() is not old_mat
