@@ -580,3 +580,147 @@ def apply_particles(obj, sheet_pc2_path: str, frames, frame_start: float) -> Non
     light.visible_volume_scatter = False
     light.hide_select = True
     sync_flame_settings(obj)
+
+
+# --- ash flakes -----------------------------------------------------------------------------------
+FLAKE_MATERIAL = "ThinBurn Ash"
+FLAKE_FALL = 0.35      # m/s: terminal speed of a light flake of char
+FLAKE_DRAG = 4.0       # 1/s: how fast it reaches the air's speed plus its fall
+FLAKE_FLUTTER = 0.12   # m/s: amplitude of its side-to-side swing
+FLAKE_SPIN = (2.0, 6.0)  # rad/s: tumbling
+FLAKE_DROP = 0.03      # m: how far a flake falls with the sheet below it still burning
+
+
+def flake_object_name(obj) -> str:
+    return f"ThinBurn Ash {obj.name}"
+
+
+def _rotation(axis, angle):
+    axis = axis / np.linalg.norm(axis)
+    x, y, z = axis
+    c, s = np.cos(angle), np.sin(angle)
+    return np.array([[c + x * x * (1 - c), x * y * (1 - c) - z * s, x * z * (1 - c) + y * s],
+                     [y * x * (1 - c) + z * s, c + y * y * (1 - c), y * z * (1 - c) - x * s],
+                     [z * x * (1 - c) - y * s, z * y * (1 - c) + x * s, c + z * z * (1 - c)]])
+
+
+def flake_frames(positions, faces, burnout, dt: float, share: float, seed: int = 0,
+                 floor=None, wind=(0.0, 0.0, 0.0)):
+    """Flakes of brittle char that break off where faces burn out.
+
+    ``positions`` (frames, n, 3) world positions of the baked sheet, ``faces`` a list of vertex
+    index lists, ``burnout`` (n,) frames since the first frame (cache.NEVER_FRAME: never).
+    A face that burns out within the bake (all its vertices past their burnout) sheds a flake
+    with probability ``share``: a quad of 70 % of the face's size, at the face, that from then
+    on falls at FLAKE_FALL, swings from side to side, tumbles, drifts with the wind and comes
+    to rest flat on ``floor`` (a world height; None: it keeps falling). Before it breaks off
+    the flake is folded into a point (invisible). Returns (frames, 4 * flakes, 3) corners
+    and the number of flakes. Deterministic per seed."""
+    positions = np.asarray(positions, dtype=np.float64)
+    n_frames = positions.shape[0]
+    rng = np.random.default_rng([int(seed), 0xA5A5])
+    wind = np.asarray(wind, dtype=np.float64)
+    picks = []
+    for face in faces:
+        when = float(np.max(burnout[list(face)]))
+        if when >= n_frames - 1 or rng.random() >= share:
+            continue
+        picks.append((list(face), when))
+    out = np.zeros((n_frames, 4 * len(picks), 3), dtype=np.float32)
+    for k, (face, when) in enumerate(picks):
+        f0 = int(np.ceil(when))
+        pts = positions[f0, face]
+        centre = pts.mean(axis=0)
+        size = 0.35 * float(np.mean(np.linalg.norm(pts - np.roll(pts, 1, axis=0), axis=1)))
+        normal = np.cross(pts[1] - pts[0], pts[-1] - pts[0])
+        if np.linalg.norm(normal) < 1e-12:
+            normal = np.array([0.0, 0.0, 1.0])
+        normal /= np.linalg.norm(normal)
+        u = pts[1] - pts[0]
+        u = u - normal * (u @ normal)
+        u /= max(np.linalg.norm(u), 1e-12)
+        v = np.cross(normal, u)
+        corners = size * np.array([u + v, -u + v, -u - v, u - v])  # about the centre
+        spin_axis = rng.standard_normal(3)
+        spin = rng.uniform(*FLAKE_SPIN) * rng.choice([-1.0, 1.0])
+        phase = rng.uniform(0, 2 * np.pi)
+        swing_dir = np.array([np.cos(phase), np.sin(phase), 0.0])
+        swing_rate = rng.uniform(2.0, 4.0)
+        out[:f0, 4 * k:4 * k + 4] = centre  # folded away until it breaks off
+        pos = centre.copy()
+        vel = np.zeros(3)
+        angle = 0.0
+        landed = False
+        for f in range(f0, n_frames):
+            t = (f - f0) * dt
+            if not landed:
+                target = wind + np.array([0.0, 0.0, -FLAKE_FALL])
+                target = target + FLAKE_FLUTTER * np.sin(swing_rate * t) * swing_dir * swing_rate / 3.0
+                vel += FLAKE_DRAG * (target - vel) * dt
+                if f > f0:
+                    pos = pos + vel * dt
+                    angle += spin * dt
+                rot = _rotation(spin_axis, angle)
+                shape = corners @ rot.T
+                if floor is not None and pos[2] + shape[:, 2].min() <= floor:
+                    landed = True
+                    flat = corners - np.outer(corners @ normal, normal)  # lie flat
+                    flat[:, 2] = 0.0
+                    pos = np.array([pos[0], pos[1], floor + 0.0005])
+                    shape = flat
+            out[f, 4 * k:4 * k + 4] = pos + shape
+    return out, len(picks)
+
+
+def flake_material():
+    """"ThinBurn Ash": black, rough, a little sheen of grey ash."""
+    mat = _current(bpy.data.materials, FLAKE_MATERIAL)
+    if mat is not None:
+        return mat
+    mat = _stamp(bpy.data.materials.new(FLAKE_MATERIAL))
+    use_nodes(mat)
+    bsdf = next(n for n in mat.node_tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled")
+    bsdf.inputs["Base Color"].default_value = (0.03, 0.028, 0.026, 1.0)
+    bsdf.inputs["Roughness"].default_value = 0.95
+    return mat
+
+
+def apply_flakes(obj, sheet_pc2_path: str, frame_start: float, burnout_frames, floor) -> None:
+    """Ash flakes for a finished bake: "ThinBurn Ash <sheet>" playing ``<name>_ash.pc2``."""
+    settings = getattr(obj, "thinburn", None)
+    share = float(getattr(settings, "flakes", 0.0))
+    name = flake_object_name(obj)
+    old = bpy.data.objects.get(name)
+    if old is not None:
+        bpy.data.objects.remove(old)
+    if share <= 0.0:
+        return
+    abs_sheet = bpy.path.abspath(sheet_pc2_path)
+    _, local = cache.read_pc2(abs_sheet)
+    m = np.array(obj.matrix_world, dtype=np.float64)
+    world = local @ m[:3, :3].T + m[:3, 3]
+    faces = [list(p.vertices) for p in obj.data.polygons]
+    since = np.asarray(burnout_frames, dtype=np.float64) - frame_start
+    scene = bpy.context.scene
+    dt = scene.render.fps_base / scene.render.fps
+    corners, count = flake_frames(world, faces, since, dt, share,
+                                  seed=int(getattr(settings, "seed", 0)), floor=floor)
+    if count == 0:
+        return
+    abs_path = abs_sheet[:-len(".pc2")] + "_ash.pc2"
+    with cache.PC2Writer(abs_path, 4 * count, start_frame=frame_start) as writer:
+        for sample in corners:
+            writer.append(sample)
+    mesh = bpy.data.meshes.new(name)
+    mesh.from_pydata(corners[0].tolist(), [], [(4 * k, 4 * k + 1, 4 * k + 2, 4 * k + 3)
+                                              for k in range(count)])
+    mesh.materials.append(flake_material())
+    flakes = bpy.data.objects.new(name, mesh)
+    for coll in obj.users_collection:
+        coll.objects.link(flakes)
+    md = ensure_modifier(flakes, CACHE_MODIFIER, "MESH_CACHE", 0)
+    md.cache_format = "PC2"
+    md.filepath = sheet_pc2_path[:-len(".pc2")] + "_ash.pc2"
+    md.frame_start = frame_start
+    md.interpolation = "LINEAR"
+    md.forward_axis, md.up_axis = "POS_Y", "POS_Z"

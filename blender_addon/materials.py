@@ -18,7 +18,7 @@ import numpy as np
 import bpy
 
 from . import cache
-from .fire import ember_object_name, fire_object_name, light_object_name
+from .fire import apply_flakes, ember_object_name, fire_object_name, flake_object_name, light_object_name
 from .nodes import (ensure_modifier, interface_socket, link, map_range, new_group, node, set_input,
                     socket, use_nodes)
 
@@ -402,6 +402,13 @@ def apply_bake(obj, pc2_path: str, frame_start: float, ignite, burnout) -> None:
     else:
         burn_materials(obj)  # the sheet's own materials char, glow and burn through too
     sync_burnt(obj)
+    floor = None
+    settings = getattr(obj, "thinburn", None)
+    if settings is not None and settings.floor_mode == "HEIGHT":
+        floor = float(settings.floor_height)
+    elif settings is not None and settings.floor_mode == "OBJECT" and settings.floor_object is not None:
+        floor = float(settings.floor_object.matrix_world.translation.z)
+    apply_flakes(obj, pc2_path, frame_start, burnout, floor)
     obj.update_tag()
     mesh.update()
 
@@ -435,7 +442,8 @@ def free_bake(obj) -> list:
                 bpy.data.materials.remove(mat)
             gone.append("material")
             break
-    for name in (fire_object_name(obj), light_object_name(obj), ember_object_name(obj)):
+    for name in (fire_object_name(obj), light_object_name(obj), ember_object_name(obj),
+                 flake_object_name(obj)):
         fire = bpy.data.objects.get(name)
         if fire is None:
             continue

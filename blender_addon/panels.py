@@ -122,6 +122,7 @@ class PHYSICS_PT_thinburn_fire(ThinBurnPhysicsPanel, bpy.types.Panel):
         layout.prop(settings, "flame_temperature")
         layout.prop(settings, "embers")
         layout.prop(settings, "burnt")
+        layout.prop(settings, "flakes")
         layout.operator("thinburn.add_burn_to_material", icon="MATERIAL")
         cycles = getattr(context.scene, "cycles", None)
         if cycles is not None and not getattr(cycles, "volume_biased", True):

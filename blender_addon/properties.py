@@ -199,6 +199,10 @@ class ThinBurnSettings(bpy.types.PropertyGroup):
         description="What burnt-out parts of the sheet become (changes the bake without a new one)",
         items=[("HOLES", "Burn Through", "Burnt-out areas become holes (the default)", 0),
                ("ASH", "Char (Ash)", "Burnt-out areas stay as black char, and keep their shape", 1)])
+    flakes: FloatProperty(
+        name="Ash Flakes", default=0.0, min=0.0, max=1.0, options=STATIC, subtype="FACTOR",
+        description="Share of the burnt-out faces that break off as flakes of char, fall, "
+                    "flutter and land on the floor (0: none); read by the bake")
     embers: FloatProperty(
         name="Embers", default=1.0, min=0.0, soft_max=10.0, options=STATIC,
         description="How many sparks the fire throws off (0: none); read by the bake")

@@ -34,12 +34,13 @@ def enable_addon(user_dir: Path):
     addon_utils.enable(ADDON_NAME, default_set=True, handle_error=fail)
 
 
-def build_scene(cache: Path, size: float, n: int, frames: int, own_material: bool):
+def build_scene(cache: Path, size: float, n: int, frames: int, own_material: bool,
+                flakes: float = 0.0, height: float = 0.0):
     import bpy
     bpy.ops.wm.read_homefile(use_empty=True)
     scene = bpy.context.scene
     step = size / (n - 1)
-    verts = [(-size / 2 + i * step, -size / 2 + j * step, 0.0) for j in range(n) for i in range(n)]
+    verts = [(-size / 2 + i * step, -size / 2 + j * step, height) for j in range(n) for i in range(n)]
     faces = [(j * n + i, j * n + i + 1, (j + 1) * n + i + 1, (j + 1) * n + i)
              for j in range(n - 1) for i in range(n - 1)]
     mesh = bpy.data.meshes.new("Sheet")
@@ -60,12 +61,16 @@ def build_scene(cache: Path, size: float, n: int, frames: int, own_material: boo
     s.mat_burn_duration = 3.0
     s.crumple_gain = 0.3  # a gentler curl keeps the ring of fire in view
     s.mat_V0 = 12.0  # mm/s: a faster front than paper's 3.5, so a short bake shows a wide ring
+    s.flakes = flakes
+    if height > 0:
+        s.crumple = False  # held flat in the air (no pins needed), burning through
+        s.mat_burn_duration = 1.0
     coll = bpy.data.collections.new("Igniters")
     scene.collection.children.link(coll)
     s.igniter_collection = coll
     igniter = bpy.data.objects.new("Igniter", None)
     coll.objects.link(igniter)
-    igniter.location = (0.0, 0.0, 0.0)
+    igniter.location = (0.0, 0.0, height)
     igniter.thinburn_igniter.radius = 0.02
     # a table under the sheet
     bpy.ops.mesh.primitive_plane_add(size=4 * size, location=(0.0, 0.0, -0.001))
@@ -114,6 +119,10 @@ def main(argv=None) -> int:
     ap.add_argument("--own-material", action="store_true",
                     help="give the sheet its own Principled BSDF before the bake")
     ap.add_argument("--name", default="blender_fire")
+    ap.add_argument("--flakes", type=float, default=0.0, help="the sheet's Ash Flakes share")
+    ap.add_argument("--height", type=float, default=0.0,
+                    help="hold the sheet this high above the table (Crumple off), m")
+    ap.add_argument("--engine", default="CYCLES", choices=["CYCLES", "BLENDER_EEVEE"])
     ap.add_argument("--view", default="Standard",
                     help="the scene's view transform (AgX, Blender's default, shows the flames paler)")
     ap.add_argument("--looks", nargs="*", default=[],
@@ -125,10 +134,12 @@ def main(argv=None) -> int:
         enable_addon(user)
         import bpy
         size = 0.3
-        sheet = build_scene(user / "cache", size, 49, max(args.frames), args.own_material)
+        sheet = build_scene(user / "cache", size, 49, max(args.frames), args.own_material,
+                            args.flakes, args.height)
         bpy.ops.thinburn.bake()
         camera_and_world(size, args.width, args.samples)
         bpy.context.scene.view_settings.view_transform = args.view
+        bpy.context.scene.render.engine = args.engine
         looks = [None] + [tuple(float(v) for v in look.split(":")) for look in args.looks]
         for frame in args.frames:
             bpy.context.scene.frame_set(frame)

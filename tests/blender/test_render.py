@@ -272,3 +272,33 @@ def test_ash_keeps_burnt_areas_as_char_instead_of_holes(addon, tmp_path):
     # measured: holes (0, 0.58, 0): the green world shows through; ash (0.20, 0.22, 0.17)
     assert through[1] > 0.4 and through[0] < 0.1, (tmp_path, through)
     assert char[1] < 0.35 and abs(char[1] - char[0]) < 0.1, (tmp_path, char)  # black char stays
+
+
+def test_ash_flakes_break_off_fall_flutter_and_land_on_the_floor(addon, tmp_path):
+    sheet = make_sheet(n=9, size=0.2, z=0.1)
+    settings = setup_bake(sheet, frames=48, cells=32, cache_dir=tmp_path / "cache", floor=False)
+    settings.crumple = False  # the sheet stays at z = 0.1; the flakes fall to the floor at 0
+    settings.floor_mode, settings.floor_height = "HEIGHT", 0.0
+    settings.mat_V0, settings.mat_burn_duration = 20.0, 0.4
+    settings.flakes = 0.5
+    make_igniter(sheet, (0.0, 0.0, 0.1), lit_from=1, radius=0.05)
+    assert bpy.ops.thinburn.bake() == {"FINISHED"}
+    flakes = bpy.data.objects["ThinBurn Ash Sheet"]
+    n = len(flakes.data.polygons)
+    head, data = addon.cache.read_pc2(tmp_path / "cache" / "Sheet_ash.pc2")
+    assert n >= 3 and head["points"] == 4 * n and head["samples"] == 48
+    centres = data.reshape(48, n, 4, 3).mean(axis=2)  # (frames, flakes, 3)
+    sizes = np.ptp(data.reshape(48, n, 4, 3), axis=2).max(axis=2)
+    broke = np.argmax(sizes > 1e-6, axis=0)  # the frame each flake breaks off
+    k = int(np.argmin(broke))
+    z = centres[broke[k]:, k, 2]
+    print("flakes:", n, "first breaks off at frame", broke[k] + 1, "heights", z[:8], "...", z[-1])
+    assert z[0] == pytest.approx(0.1, abs=0.01)        # it starts at the sheet
+    assert np.all(np.diff(z) <= 1e-6) and z[-1] == pytest.approx(0.0005, abs=1e-4)  # falls, lands
+    assert np.ptp(centres[broke[k]:, k, :2], axis=0).max() > 0.002  # and drifts sideways
+    _, sheet_positions = addon.cache.read_pc2(tmp_path / "cache" / "Sheet.pc2")  # identity transform
+    again, count = addon.fire.flake_frames(
+        sheet_positions, [list(p.vertices) for p in sheet.data.polygons],
+        point_attribute(sheet, "thinburn_burnout_time") - 1.0, 1 / 24, 0.5, seed=0, floor=0.0)
+    np.testing.assert_allclose(again, data, atol=1e-6)  # deterministic: the same flakes
+    assert addon.materials.free_bake(sheet) and "ThinBurn Ash Sheet" not in bpy.data.objects
