@@ -53,7 +53,7 @@ def _inputs(tree):
                      desc="Brightness of the flames and of the light they cast")
     interface_socket(tree, "Flame Temperature", "INPUT", "NodeSocketFloat", FLAME_COLOR_K, 800.0,
                      desc="Colour temperature of the hottest flame, kelvin: about 1200 is deep "
-                          "red, 1700 orange, 2500 yellow-white")
+                          "red, 1700 orange, 2300 yellow-orange, 3000 yellow-white")
     interface_socket(tree, "Voxel Size", "INPUT", "NodeSocketFloat", VOXEL_SIZE, 0.0001,
                      desc="Detail of the flame volume, m: smaller is finer and slower")
     interface_socket(tree, "Output", "INPUT", "NodeSocketInt", 0, 0, 2,
@@ -255,7 +255,7 @@ def fire_group():
 
 AMBIENT_K = 293.15      # the core's particle temperatures are kelvin above ambient
 FLAME_K = 900.0         # a particle's temperature at birth (the core's temperature0)
-FLAME_COLOR_K = 1700.0  # the colour temperature shown for a particle at FLAME_K
+FLAME_COLOR_K = 2300.0  # the colour temperature shown for a particle at FLAME_K
 FLAME_RADIUS = 0.010    # m, a flame puff around one particle
 FLAME_HEIGHT = 0.06     # m, a tongue's rise above a particle at FLAME_K
 VOXEL_SIZE = 0.0025     # m

@@ -189,10 +189,10 @@ class ThinBurnSettings(bpy.types.PropertyGroup):
         name="Flame Intensity", default=1.0, min=0.0, soft_max=20.0, update=_on_flame, options=STATIC,
         description="Brightness of the flames and of the light they cast on the sheet")
     flame_temperature: FloatProperty(
-        name="Flame Temperature", default=1700.0, min=800.0, soft_max=4000.0, update=_on_flame,
+        name="Flame Temperature", default=2300.0, min=800.0, soft_max=4000.0, update=_on_flame,
         options=STATIC,
         description="Colour temperature of the hottest flames, kelvin: about 1200 is deep red, "
-                    "1700 orange, 2500 and above yellow-white")
+                    "1700 orange, 2300 (default) yellow-orange, 3000 and above yellow-white")
 
     burnt: EnumProperty(
         name="Burnt", default="HOLES", update=_on_burnt, options=STATIC,

@@ -106,7 +106,6 @@ def camera_and_world(size: float, width: int, samples: int):
     scene.cycles.device = "CPU"
     scene.cycles.samples = samples
     scene.cycles.volume_biased = True  # ray-marched volumes: far faster flames (docs/blender.md)
-    scene.view_settings.view_transform = "AgX"
 
 
 def main(argv=None) -> int:
@@ -123,8 +122,7 @@ def main(argv=None) -> int:
     ap.add_argument("--height", type=float, default=0.0,
                     help="hold the sheet this high above the table (Crumple off), m")
     ap.add_argument("--engine", default="CYCLES", choices=["CYCLES", "BLENDER_EEVEE"])
-    ap.add_argument("--view", default="Standard",
-                    help="the scene's view transform (AgX, Blender's default, shows the flames paler)")
+    ap.add_argument("--view", default="AgX", help="the scene's view transform (AgX: Blender's default)")
     ap.add_argument("--looks", nargs="*", default=[],
                     help="extra looks as intensity:kelvin:height, rendered per frame (look-dev)")
     args = ap.parse_args(argv)

@@ -135,8 +135,8 @@ def test_fire_object_alone_glows_warm_at_the_burning_edge(addon, tmp_path):
     hot = lum > background + 0.1
     print("fire alone: background", background, "hot pixels", int(hot.sum()),
           "mean rgb there", rgb[hot].mean(axis=0))
-    # measured: background 0.247, 531 hot pixels of 3072, mean rgb there (0.91, 0.36, 0.25),
-    # mean luminance 0.47
+    # measured: background 0.247, 552 hot pixels of 3072, mean rgb there (0.86, 0.43, 0.25),
+    # mean luminance 0.51
     assert hot.sum() >= 200, (tmp_path, int(hot.sum()))
     red, green, blue = rgb[hot].mean(axis=0)
     assert red > 2.0 * blue and red > 1.3 * green, (tmp_path, red, green, blue)
@@ -154,8 +154,8 @@ def test_flames_light_the_sheet(addon, tmp_path):
     near = _annulus(h, w, 0.06, 0.08)  # unburnt paper just outside the ring of fire
     warm, grey = lit[near].mean(axis=0), dark[near].mean(axis=0)
     print("flame light: rgb near the fire", warm, "without the light", grey)
-    # measured: (0.43, 0.19, 0.16) lit against (0.25, 0.22, 0.20) unlit
-    assert warm[0] - grey[0] > 0.12, (tmp_path, warm, grey)
+    # measured: (0.40, 0.21, 0.16) lit against (0.25, 0.22, 0.20) unlit
+    assert warm[0] - grey[0] > 0.1, (tmp_path, warm, grey)
     assert warm[0] > 1.5 * warm[2], (tmp_path, warm)
     assert sheet.hide_render is False
 
@@ -293,6 +293,8 @@ def test_ash_flakes_break_off_fall_flutter_and_land_on_the_floor(addon, tmp_path
     k = int(np.argmin(broke))
     z = centres[broke[k]:, k, 2]
     print("flakes:", n, "first breaks off at frame", broke[k] + 1, "heights", z[:8], "...", z[-1])
+    # measured: 9 flakes; the first breaks off at frame 11 and falls 0.1, 0.096, 0.089, ... to
+    # rest at 0.0005 on the floor
     assert z[0] == pytest.approx(0.1, abs=0.01)        # it starts at the sheet
     assert np.all(np.diff(z) <= 1e-6) and z[-1] == pytest.approx(0.0005, abs=1e-4)  # falls, lands
     assert np.ptp(centres[broke[k]:, k, :2], axis=0).max() > 0.002  # and drifts sideways
