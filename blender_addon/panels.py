@@ -117,6 +117,9 @@ class PHYSICS_PT_thinburn_fire(ThinBurnPhysicsPanel, bpy.types.Panel):
         layout.use_property_split = True
         settings = context.object.thinburn
         layout.active = settings.enabled
+        if not settings.crumple:
+            layout.label(text="Flames and embers need Crumple: the fire particles come with it",
+                         icon="INFO")
         layout.prop(settings, "flame_height")
         layout.prop(settings, "flame_intensity")
         layout.prop(settings, "flame_temperature")
