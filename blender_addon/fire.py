@@ -261,7 +261,7 @@ FLAME_HEIGHT = 0.06     # m, a tongue's rise above a particle at FLAME_K
 VOXEL_SIZE = 0.0025     # m
 MIN_TEMPERATURE = 350.0  # K above ambient: cooler particles barely glow (weight < 0.03)
 STREAK = 5              # puffs per tongue, the particle's own included
-FLAME_STRENGTH = 100.0  # volume emission of a flame point at FLAME_K and Intensity 1
+FLAME_STRENGTH = 50.0   # volume emission of a flame point at FLAME_K and Intensity 1
 LICK_SCALE = (60.0, 60.0, 20.0)  # 1/m: the noise that shapes the tongues
 LIGHT_STRENGTH = 1.0    # surface emission of a light sphere at FLAME_K and Intensity 1
 

@@ -135,12 +135,12 @@ def test_fire_object_alone_glows_warm_at_the_burning_edge(addon, tmp_path):
     hot = lum > background + 0.1
     print("fire alone: background", background, "hot pixels", int(hot.sum()),
           "mean rgb there", rgb[hot].mean(axis=0))
-    # measured: background 0.247, 552 hot pixels of 3072, mean rgb there (0.86, 0.43, 0.25),
-    # mean luminance 0.51
-    assert hot.sum() >= 200, (tmp_path, int(hot.sum()))
+    # measured: background 0.247, 443 hot pixels of 3072, mean rgb there (0.75, 0.38, 0.25),
+    # mean luminance 0.45
+    assert hot.sum() >= 150, (tmp_path, int(hot.sum()))
     red, green, blue = rgb[hot].mean(axis=0)
     assert red > 2.0 * blue and red > 1.3 * green, (tmp_path, red, green, blue)
-    assert lum[hot].mean() > background + 0.15, (tmp_path, lum[hot].mean())
+    assert lum[hot].mean() > background + 0.12, (tmp_path, lum[hot].mean())
 
 
 def test_flames_light_the_sheet(addon, tmp_path):
