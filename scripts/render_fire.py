@@ -1,4 +1,5 @@
-"""Render the add-on's fire: `python scripts/render_fire.py` (writes docs/images/blender_*.png).
+"""Render the add-on's fire: `python scripts/render_fire.py` (writes docs/images/blender_fire_*.png;
+docs/blender.md lists the commands behind each picture there).
 
 Bakes a 0.3 m sheet of paper lying on a table, lit at its centre, with the add-on from this
 checkout (bpy as a module, throwaway user folders), then renders Cycles frames of the flames,
@@ -119,6 +120,9 @@ def main(argv=None) -> int:
                     help="give the sheet its own Principled BSDF before the bake")
     ap.add_argument("--name", default="blender_fire")
     ap.add_argument("--flakes", type=float, default=0.0, help="the sheet's Ash Flakes share")
+    ap.add_argument("--intensity", type=float, default=None, help="the sheet's Flame Intensity")
+    ap.add_argument("--flame-temperature", type=float, default=None,
+                    help="the sheet's Flame Temperature, K")
     ap.add_argument("--height", type=float, default=0.0,
                     help="hold the sheet this high above the table (Crumple off), m")
     ap.add_argument("--engine", default="CYCLES", choices=["CYCLES", "BLENDER_EEVEE"])
@@ -134,6 +138,10 @@ def main(argv=None) -> int:
         size = 0.3
         sheet = build_scene(user / "cache", size, 49, max(args.frames), args.own_material,
                             args.flakes, args.height)
+        if args.intensity is not None:
+            sheet.thinburn.flame_intensity = args.intensity
+        if args.flame_temperature is not None:
+            sheet.thinburn.flame_temperature = args.flame_temperature
         bpy.ops.thinburn.bake()
         camera_and_world(size, args.width, args.samples)
         bpy.context.scene.view_settings.view_transform = args.view
