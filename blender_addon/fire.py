@@ -1,9 +1,20 @@
 """Fire particles of a bake (when the core has ``Simulation.particles``).
 
-They become an object "ThinBurn Fire <sheet>" whose Mesh Cache plays ``<name>_fire.pc2`` and
-whose geometry nodes ("ThinBurn Fire") turn the cached points into a point cloud with a
-``temperature`` attribute and the emission material "ThinBurn Fire". Renders without the
-add-on.
+They become two objects that share one mesh, whose Mesh Cache plays ``<name>_fire.pc2``
+and whose geometry nodes ("ThinBurn Fire") turn the cached points into flames. Both render
+in Cycles and EEVEE without the add-on:
+
+* "ThinBurn Fire <sheet>": the flames, a volume. Every hot particle becomes a tongue of a few
+  puffs that rises *Flame Height* above it and cools towards its tip; Points to Volume gives
+  the ``density`` grid, and Field to Grid samples the nearest puff's ``tb_temperature``
+  (colour temperature, K) and ``tb_flame`` (emission weight) onto grids of those names.
+  Material "ThinBurn Fire": blackbody emission, seen by the camera only.
+* "ThinBurn Fire Light <sheet>": the same puffs as small glowing spheres (material "ThinBurn
+  Fire Light"), invisible to the camera, that cast the flames' light onto the sheet (Cycles
+  samples emissive meshes directly, so this is not noisy at low samples).
+
+Attribute names start with ``tb_``: Cycles resolves ``temperature`` to its own volume
+attribute.
 """
 from __future__ import annotations
 
@@ -16,109 +27,321 @@ from .nodes import ensure_modifier, interface_socket, new_group, node, set_input
 
 CACHE_MODIFIER = "ThinBurn Cache"
 FIRE_GROUP = "ThinBurn Fire"
+FIRE_MATERIAL = "ThinBurn Fire"
+LIGHT_MATERIAL = "ThinBurn Fire Light"
+ATTR_TEMPERATURE = "tb_particle_temperature"  # K above ambient, as the core gives it
+ATTR_KELVIN = "tb_temperature"  # colour temperature, K (not "temperature": Cycles' own name)
+ATTR_FLAME = "tb_flame"  # emission weight
 
 
 def fire_object_name(obj) -> str:
     return f"ThinBurn Fire {obj.name}"
 
 
-def fire_group():
-    """Geometry node group "ThinBurn Fire": the first Count points of the cached mesh become a
-    point cloud; point Count + i carries (temperature, alive, 0) of particle i."""
-    tree, fresh = new_group(FIRE_GROUP, "GeometryNodeTree")
-    if not fresh:
-        return tree
+def _inputs(tree):
     interface_socket(tree, "Geometry", "INPUT", "NodeSocketGeometry")
     interface_socket(tree, "Count", "INPUT", "NodeSocketInt", 1, 0, desc="Particle slots in the cache")
-    interface_socket(tree, "Radius", "INPUT", "NodeSocketFloat", 0.004, 0.0, desc="Radius of a fire particle, m")
-    interface_socket(tree, "Min Temperature", "INPUT", "NodeSocketFloat", 150.0, 0.0,
+    interface_socket(tree, "Radius", "INPUT", "NodeSocketFloat", FLAME_RADIUS, 0.0,
+                     desc="Radius of the flame around one fire particle, m")
+    interface_socket(tree, "Min Temperature", "INPUT", "NodeSocketFloat", MIN_TEMPERATURE, 0.0,
                      desc="Particles cooler than this (K above ambient) are left out: they no "
-                          "longer glow, and fewer see-through particles render faster")
+                          "longer glow, and fewer particles render faster")
+    interface_socket(tree, "Flame Height", "INPUT", "NodeSocketFloat", FLAME_HEIGHT, 0.0,
+                     desc="How far above each hot particle its flame reaches, m (at the "
+                          "particle's birth temperature; cooler particles make shorter flames)")
+    interface_socket(tree, "Intensity", "INPUT", "NodeSocketFloat", 1.0, 0.0,
+                     desc="Brightness of the flames and of the light they cast")
+    interface_socket(tree, "Flame Temperature", "INPUT", "NodeSocketFloat", FLAME_COLOR_K, 800.0,
+                     desc="Colour temperature of the hottest flame, kelvin: about 1200 is deep "
+                          "red, 1700 orange, 2300 yellow-orange, 3000 yellow-white")
+    interface_socket(tree, "Voxel Size", "INPUT", "NodeSocketFloat", VOXEL_SIZE, 0.0001,
+                     desc="Detail of the flame volume, m: smaller is finer and slower")
+    interface_socket(tree, "Output", "INPUT", "NodeSocketInt", 0, 0, 2,
+                     desc="0: flames (a volume), 1: light emitters (small glowing spheres, for "
+                          "the camera-invisible light object), 2: the fire particles as points")
     interface_socket(tree, "Material", "INPUT", "NodeSocketMaterial")
     interface_socket(tree, "Geometry", "OUTPUT", "NodeSocketGeometry")
-    gi = node(tree, "NodeGroupInput", -900, 0)
-    go = node(tree, "NodeGroupOutput", 900, 0)
-    index = node(tree, "GeometryNodeInputIndex", -900, -300)
-    pos = node(tree, "GeometryNodeInputPosition", -900, -450)
-    other = node(tree, "ShaderNodeMath", -650, -300, operation="ADD")
-    tree.links.new(index.outputs[0], other.inputs[0])
-    tree.links.new(gi.outputs["Count"], other.inputs[1])
-    sample = node(tree, "GeometryNodeSampleIndex", -450, -200, data_type="FLOAT_VECTOR", domain="POINT")
-    tree.links.new(gi.outputs["Geometry"], sample.inputs["Geometry"])
-    tree.links.new(pos.outputs[0], socket(sample.inputs, "Value"))
-    tree.links.new(other.outputs[0], sample.inputs["Index"])
-    split = node(tree, "ShaderNodeSeparateXYZ", -250, -200)
-    tree.links.new(socket(sample.outputs, "Value"), split.inputs[0])
-    first = node(tree, "FunctionNodeCompare", -450, 100, data_type="INT", operation="LESS_THAN")
-    tree.links.new(index.outputs[0], socket(first.inputs, "A_INT"))
-    tree.links.new(gi.outputs["Count"], socket(first.inputs, "B_INT"))
-    live = node(tree, "FunctionNodeCompare", -50, -200, data_type="FLOAT", operation="GREATER_THAN")
-    tree.links.new(split.outputs["Y"], live.inputs[0])
+
+
+VERSION = 2  # of the groups and materials below; older ones (from an earlier add-on) are renamed
+
+
+def _current(collection, name):
+    """The datablock `name` if it is of this VERSION; an older one is renamed out of the way
+    (objects still using it keep it) so that a fresh one is built."""
+    block = collection.get(name)
+    if block is not None and block.get("thinburn_version", 1) < VERSION:
+        block.name = f"{name} (old)"
+        block = None
+    return block
+
+
+def _stamp(block):
+    block["thinburn_version"] = VERSION
+    return block
+
+
+def fire_group():
+    """Geometry node group "ThinBurn Fire" (see the module docstring). Point i < Count of the
+    cached mesh is particle i's position; point Count + i carries (temperature, alive, 0)."""
+    tree = _current(bpy.data.node_groups, FIRE_GROUP)
+    if tree is not None:
+        return tree
+    tree, _ = new_group(FIRE_GROUP, "GeometryNodeTree")
+    _stamp(tree)
+    _inputs(tree)
+    L = tree.links.new
+    gi = node(tree, "NodeGroupInput", -1600, 0)
+    go = node(tree, "NodeGroupOutput", 2200, 0)
+    # --- the live, hot particles as points with tb_temperature --------------------------------
+    index = node(tree, "GeometryNodeInputIndex", -1600, -300)
+    pos = node(tree, "GeometryNodeInputPosition", -1600, -450)
+    other = node(tree, "ShaderNodeMath", -1400, -300, operation="ADD")
+    L(index.outputs[0], other.inputs[0])
+    L(gi.outputs["Count"], other.inputs[1])
+    sample = node(tree, "GeometryNodeSampleIndex", -1200, -200, data_type="FLOAT_VECTOR", domain="POINT")
+    L(gi.outputs["Geometry"], sample.inputs["Geometry"])
+    L(pos.outputs[0], socket(sample.inputs, "Value"))
+    L(other.outputs[0], sample.inputs["Index"])
+    split = node(tree, "ShaderNodeSeparateXYZ", -1000, -200)
+    L(socket(sample.outputs, "Value"), split.inputs[0])
+    first = node(tree, "FunctionNodeCompare", -1200, 100, data_type="INT", operation="LESS_THAN")
+    L(index.outputs[0], socket(first.inputs, "A_INT"))
+    L(gi.outputs["Count"], socket(first.inputs, "B_INT"))
+    live = node(tree, "FunctionNodeCompare", -800, -200, data_type="FLOAT", operation="GREATER_THAN")
+    L(split.outputs["Y"], live.inputs[0])
     set_input(live, "B", 0.5)
-    hot = node(tree, "FunctionNodeCompare", -50, -400, data_type="FLOAT", operation="GREATER_EQUAL")
-    tree.links.new(split.outputs["X"], hot.inputs[0])
-    tree.links.new(gi.outputs["Min Temperature"], hot.inputs[1])
-    glowing = node(tree, "FunctionNodeBooleanMath", 150, -300, operation="AND")
-    tree.links.new(live.outputs[0], glowing.inputs[0])
-    tree.links.new(hot.outputs[0], glowing.inputs[1])
-    keep = node(tree, "FunctionNodeBooleanMath", 150, 0, operation="AND")
-    tree.links.new(first.outputs[0], keep.inputs[0])
-    tree.links.new(glowing.outputs[0], keep.inputs[1])
-    store = node(tree, "GeometryNodeStoreNamedAttribute", 150, 250, data_type="FLOAT", domain="POINT")
-    set_input(store, "Name", "temperature")
-    tree.links.new(gi.outputs["Geometry"], store.inputs["Geometry"])
-    tree.links.new(split.outputs["X"], socket(store.inputs, "Value"))
-    points = node(tree, "GeometryNodeMeshToPoints", 400, 100)
-    tree.links.new(store.outputs[0], points.inputs["Mesh"])
-    tree.links.new(keep.outputs[0], points.inputs["Selection"])
-    tree.links.new(gi.outputs["Radius"], points.inputs["Radius"])
-    setmat = node(tree, "GeometryNodeSetMaterial", 650, 100)
-    tree.links.new(points.outputs[0], setmat.inputs["Geometry"])
-    tree.links.new(gi.outputs["Material"], setmat.inputs["Material"])
-    tree.links.new(setmat.outputs[0], go.inputs["Geometry"])
+    hot = node(tree, "FunctionNodeCompare", -800, -400, data_type="FLOAT", operation="GREATER_EQUAL")
+    L(split.outputs["X"], hot.inputs[0])
+    L(gi.outputs["Min Temperature"], hot.inputs[1])
+    glowing = node(tree, "FunctionNodeBooleanMath", -600, -300, operation="AND")
+    L(live.outputs[0], glowing.inputs[0])
+    L(hot.outputs[0], glowing.inputs[1])
+    keep = node(tree, "FunctionNodeBooleanMath", -600, 0, operation="AND")
+    L(first.outputs[0], keep.inputs[0])
+    L(glowing.outputs[0], keep.inputs[1])
+    store = node(tree, "GeometryNodeStoreNamedAttribute", -600, 250, data_type="FLOAT", domain="POINT")
+    set_input(store, "Name", ATTR_TEMPERATURE)
+    L(gi.outputs["Geometry"], store.inputs["Geometry"])
+    L(split.outputs["X"], socket(store.inputs, "Value"))
+    points = node(tree, "GeometryNodeMeshToPoints", -400, 100)
+    L(store.outputs[0], points.inputs["Mesh"])
+    L(keep.outputs[0], points.inputs["Selection"])
+    L(gi.outputs["Radius"], points.inputs["Radius"])
+    temp = node(tree, "GeometryNodeInputNamedAttribute", -400, -200, data_type="FLOAT")
+    set_input(temp, "Name", ATTR_TEMPERATURE)
+    # --- flames: each particle becomes a tongue of STREAK puffs rising Flame Height * T/T0 ----
+    dup = node(tree, "GeometryNodeDuplicateElements", -200, 100, domain="POINT")
+    L(points.outputs[0], dup.inputs["Geometry"])
+    set_input(dup, "Amount", STREAK - 1)
+    along = node(tree, "ShaderNodeMath", 0, -100, operation="DIVIDE")  # 0 at the base .. 1 at the tip
+    L(dup.outputs["Duplicate Index"], along.inputs[0])
+    along.inputs[1].default_value = STREAK - 1
+    rel = node(tree, "ShaderNodeMath", 0, -250, operation="DIVIDE")
+    L(temp.outputs["Attribute"], rel.inputs[0])
+    rel.inputs[1].default_value = FLAME_K
+    rise = node(tree, "ShaderNodeMath", 200, -250, operation="MULTIPLY")
+    L(along.outputs[0], rise.inputs[0])
+    L(gi.outputs["Flame Height"], rise.inputs[1])
+    rise2 = node(tree, "ShaderNodeMath", 400, -250, operation="MULTIPLY")
+    L(rise.outputs[0], rise2.inputs[0])
+    L(rel.outputs[0], rise2.inputs[1])
+    up = node(tree, "ShaderNodeCombineXYZ", 600, -250)
+    L(rise2.outputs[0], up.inputs["Z"])
+    lift = node(tree, "GeometryNodeSetPosition", 600, 100)
+    L(dup.outputs["Geometry"], lift.inputs["Geometry"])
+    L(up.outputs[0], lift.inputs["Offset"])
+    # the tongue cools towards its tip: T * (1 - 0.7 * along)
+    cool = node(tree, "ShaderNodeMath", 200, -450, operation="MULTIPLY_ADD")
+    L(along.outputs[0], cool.inputs[0])
+    cool.inputs[1].default_value = -0.7
+    cool.inputs[2].default_value = 1.0
+    cooled = node(tree, "ShaderNodeMath", 400, -450, operation="MULTIPLY")
+    L(temp.outputs["Attribute"], cooled.inputs[0])
+    L(cool.outputs[0], cooled.inputs[1])
+    tongue = node(tree, "GeometryNodeStoreNamedAttribute", 800, 100, data_type="FLOAT", domain="POINT")
+    set_input(tongue, "Name", ATTR_TEMPERATURE)
+    L(lift.outputs[0], tongue.inputs["Geometry"])
+    L(cooled.outputs[0], socket(tongue.inputs, "Value"))
+    both = node(tree, "GeometryNodeJoinGeometry", 1000, 100)  # the particles and their tongues
+    L(tongue.outputs[0], both.inputs[0])
+    L(points.outputs[0], both.inputs[0])
+    # what the shaders read: tb_temperature = the colour temperature in kelvin, tb_flame = the
+    # emission weight Intensity * (T / T0)^4 (Stefan-Boltzmann)
+    t_now = node(tree, "GeometryNodeInputNamedAttribute", 1000, -200, data_type="FLOAT")
+    set_input(t_now, "Name", ATTR_TEMPERATURE)
+    ratio = node(tree, "ShaderNodeMath", 1200, -200, operation="DIVIDE")
+    L(t_now.outputs["Attribute"], ratio.inputs[0])
+    ratio.inputs[1].default_value = FLAME_K
+    span = node(tree, "ShaderNodeMath", 1200, -400, operation="SUBTRACT")
+    L(gi.outputs["Flame Temperature"], span.inputs[0])
+    span.inputs[1].default_value = AMBIENT_K
+    kelvin = node(tree, "ShaderNodeMath", 1400, -300, operation="MULTIPLY_ADD")
+    L(ratio.outputs[0], kelvin.inputs[0])
+    L(span.outputs[0], kelvin.inputs[1])
+    kelvin.inputs[2].default_value = AMBIENT_K
+    fourth = node(tree, "ShaderNodeMath", 1400, -100, operation="POWER")
+    L(ratio.outputs[0], fourth.inputs[0])
+    fourth.inputs[1].default_value = 4.0
+    weight = node(tree, "ShaderNodeMath", 1600, -100, operation="MULTIPLY")
+    L(fourth.outputs[0], weight.inputs[0])
+    L(gi.outputs["Intensity"], weight.inputs[1])
+    store_k = node(tree, "GeometryNodeStoreNamedAttribute", 1200, 100, data_type="FLOAT", domain="POINT")
+    set_input(store_k, "Name", ATTR_KELVIN)
+    L(both.outputs[0], store_k.inputs["Geometry"])
+    L(kelvin.outputs[0], socket(store_k.inputs, "Value"))
+    store_w = node(tree, "GeometryNodeStoreNamedAttribute", 1400, 100, data_type="FLOAT", domain="POINT")
+    set_input(store_w, "Name", ATTR_FLAME)
+    L(store_k.outputs[0], store_w.inputs["Geometry"])
+    L(weight.outputs[0], socket(store_w.inputs, "Value"))
+    flames = store_w.outputs[0]
+    # --- output 0: a volume (density from Points to Volume, the two grids sampled from the
+    # nearest flame point); Blender's volume grids carry no point attributes by themselves
+    to_volume = node(tree, "GeometryNodePointsToVolume", 1600, 400)
+    L(flames, to_volume.inputs["Points"])
+    set_input(to_volume, "Resolution Mode", "Size")
+    L(gi.outputs["Voxel Size"], to_volume.inputs["Voxel Size"])
+    L(gi.outputs["Radius"], to_volume.inputs["Radius"])
+    set_input(to_volume, "Density", 1.0)
+    density = node(tree, "GeometryNodeGetNamedGrid", 1800, 400, data_type="FLOAT")
+    L(to_volume.outputs[0], density.inputs["Volume"])
+    set_input(density, "Name", "density")
+    set_input(density, "Remove", False)
+    nearest = node(tree, "GeometryNodeSampleNearest", 1600, 700, domain="POINT")
+    L(flames, nearest.inputs["Geometry"])
+    L(node(tree, "GeometryNodeInputPosition", 1400, 700).outputs[0], nearest.inputs["Sample Position"])
+    to_grid = node(tree, "GeometryNodeFieldToGrid", 2000, 600, data_type="FLOAT")
+    L(density.outputs["Grid"], to_grid.inputs["Topology"])
+    volume = density.outputs["Volume"]
+    for k, name in enumerate((ATTR_KELVIN, ATTR_FLAME)):
+        to_grid.grid_items.new("FLOAT", name)
+        attr = node(tree, "GeometryNodeInputNamedAttribute", 1600, 900 + 150 * k, data_type="FLOAT")
+        set_input(attr, "Name", name)
+        pick = node(tree, "GeometryNodeSampleIndex", 1800, 900 + 150 * k, data_type="FLOAT", domain="POINT")
+        L(flames, pick.inputs["Geometry"])
+        L(attr.outputs["Attribute"], socket(pick.inputs, "Value"))
+        L(nearest.outputs[0], pick.inputs["Index"])
+        L(socket(pick.outputs, "Value"), to_grid.inputs[k + 1])
+    for k, name in enumerate((ATTR_KELVIN, ATTR_FLAME)):
+        keep_grid = node(tree, "GeometryNodeStoreNamedGrid", 2200 + 200 * k, 400, data_type="FLOAT")
+        L(volume, keep_grid.inputs["Volume"])
+        set_input(keep_grid, "Name", name)
+        L(to_grid.outputs[k], keep_grid.inputs["Grid"])
+        volume = keep_grid.outputs[0]
+    # --- output 1: small glowing spheres that light the scene (Cycles samples emissive meshes
+    # directly, so they light the sheet with little noise at low samples)
+    sphere = node(tree, "GeometryNodeMeshIcoSphere", 1600, -600)
+    set_input(sphere, "Radius", 1.0)
+    set_input(sphere, "Subdivisions", 1)
+    inst = node(tree, "GeometryNodeInstanceOnPoints", 1800, -400)
+    L(flames, inst.inputs["Points"])
+    L(sphere.outputs["Mesh"], inst.inputs["Instance"])
+    L(gi.outputs["Radius"], inst.inputs["Scale"])
+    real = node(tree, "GeometryNodeRealizeInstances", 2000, -400)
+    L(inst.outputs[0], real.inputs[0])
+    # --- pick the output ------------------------------------------------------------------
+    choose = node(tree, "GeometryNodeIndexSwitch", 2400, 0, data_type="GEOMETRY")
+    L(gi.outputs["Output"], choose.inputs["Index"])
+    L(volume, choose.inputs[1])
+    L(real.outputs[0], choose.inputs[2])
+    choose.index_switch_items.new()
+    L(points.outputs[0], choose.inputs[3])
+    setmat = node(tree, "GeometryNodeSetMaterial", 2600, 0)
+    L(choose.outputs[0], setmat.inputs["Geometry"])
+    L(gi.outputs["Material"], setmat.inputs["Material"])
+    L(setmat.outputs[0], go.inputs["Geometry"])
     return tree
 
 
 AMBIENT_K = 293.15      # the core's particle temperatures are kelvin above ambient
 FLAME_K = 900.0         # a particle's temperature at birth (the core's temperature0)
-FLAME_STRENGTH = 20.0   # emission strength of a particle at FLAME_K
+FLAME_COLOR_K = 2300.0  # the colour temperature shown for a particle at FLAME_K
+FLAME_RADIUS = 0.010    # m, a flame puff around one particle
+FLAME_HEIGHT = 0.06     # m, a tongue's rise above a particle at FLAME_K
+VOXEL_SIZE = 0.0025     # m
+MIN_TEMPERATURE = 350.0  # K above ambient: cooler particles barely glow (weight < 0.03)
+STREAK = 5              # puffs per tongue, the particle's own included
+FLAME_STRENGTH = 50.0   # volume emission of a flame point at FLAME_K and Intensity 1
+LICK_SCALE = (60.0, 60.0, 20.0)  # 1/m: the noise that shapes the tongues
+LIGHT_STRENGTH = 1.0    # surface emission of a light sphere at FLAME_K and Intensity 1
+
+
+def _emission(tree, x, strength, camera_only):
+    """Blackbody(tb_temperature) emission of strength tb_flame * strength."""
+    kelvin = node(tree, "ShaderNodeAttribute", x - 800, 150, attribute_type="GEOMETRY",
+                  attribute_name=ATTR_KELVIN)
+    weight = node(tree, "ShaderNodeAttribute", x - 800, -100, attribute_type="GEOMETRY",
+                  attribute_name=ATTR_FLAME)
+    body = node(tree, "ShaderNodeBlackbody", x - 550, 150)
+    tree.links.new(kelvin.outputs["Fac"], body.inputs["Temperature"])
+    scale = node(tree, "ShaderNodeMath", x - 550, -100, operation="MULTIPLY")
+    tree.links.new(weight.outputs["Fac"], scale.inputs[0])
+    scale.inputs[1].default_value = strength
+    last = scale
+    if camera_only:  # the light object lights the scene: the volume only shows, no double light
+        path = node(tree, "ShaderNodeLightPath", x - 800, -350)
+        only = node(tree, "ShaderNodeMath", x - 350, -150, operation="MULTIPLY")
+        tree.links.new(scale.outputs[0], only.inputs[0])
+        tree.links.new(path.outputs["Is Camera Ray"], only.inputs[1])
+        last = only
+    emit = node(tree, "ShaderNodeEmission", x - 150, 50)
+    tree.links.new(body.outputs[0], emit.inputs["Color"])
+    tree.links.new(last.outputs[0], emit.inputs["Strength"])
+    return emit
 
 
 def fire_material():
-    """Glowing, see-through flame particles: a blackbody emission of the particle's absolute
-    temperature, brightness ~ (T / FLAME_K)^4 (Stefan-Boltzmann), added to a transparent
-    BSDF so that cooled particles fade out instead of turning into black beads."""
-    mat = bpy.data.materials.get(FIRE_GROUP)
+    """"ThinBurn Fire": the flame volume. Emission of the colour temperature tb_temperature,
+    strength tb_flame (Intensity * (T / T0)^4) * density, shown to the camera only (the light
+    object casts the flames' light)."""
+    mat = _current(bpy.data.materials, FIRE_MATERIAL)
     if mat is not None:
         return mat
-    mat = bpy.data.materials.new(FIRE_GROUP)
+    mat = _stamp(bpy.data.materials.new(FIRE_MATERIAL))
     use_nodes(mat)
     tree = mat.node_tree
     tree.nodes.clear()
-    temp = node(tree, "ShaderNodeAttribute", -800, 0, attribute_type="GEOMETRY", attribute_name="temperature")
-    absolute = node(tree, "ShaderNodeMath", -550, 150, operation="ADD")
-    tree.links.new(temp.outputs["Fac"], absolute.inputs[0])
-    absolute.inputs[1].default_value = AMBIENT_K
-    body = node(tree, "ShaderNodeBlackbody", -350, 150)
-    tree.links.new(absolute.outputs[0], body.inputs["Temperature"])
-    ratio = node(tree, "ShaderNodeMath", -550, -100, operation="DIVIDE")
-    tree.links.new(temp.outputs["Fac"], ratio.inputs[0])
-    ratio.inputs[1].default_value = FLAME_K
-    power = node(tree, "ShaderNodeMath", -350, -100, operation="POWER")
-    tree.links.new(ratio.outputs[0], power.inputs[0])
-    power.inputs[1].default_value = 4.0
-    scale = node(tree, "ShaderNodeMath", -150, -100, operation="MULTIPLY")
-    tree.links.new(power.outputs[0], scale.inputs[0])
-    scale.inputs[1].default_value = FLAME_STRENGTH
-    emit = node(tree, "ShaderNodeEmission", 50, 50)
-    tree.links.new(body.outputs[0], emit.inputs["Color"])
-    tree.links.new(scale.outputs[0], emit.inputs["Strength"])
-    clear = node(tree, "ShaderNodeBsdfTransparent", 50, -150)
-    add = node(tree, "ShaderNodeAddShader", 250, 0)
-    tree.links.new(clear.outputs[0], add.inputs[0])
-    tree.links.new(emit.outputs[0], add.inputs[1])
-    out = node(tree, "ShaderNodeOutputMaterial", 450, 0)
-    tree.links.new(add.outputs[0], out.inputs["Surface"])
+    emit = _emission(tree, 0, FLAME_STRENGTH, camera_only=True)
+    dens = node(tree, "ShaderNodeAttribute", -800, -550, attribute_type="GEOMETRY", attribute_name="density")
+    # licks: a noise stretched upwards breaks the glow into tongues
+    where = node(tree, "ShaderNodeTexCoord", -1400, -800)
+    stretch = node(tree, "ShaderNodeVectorMath", -1200, -800, operation="MULTIPLY")
+    tree.links.new(where.outputs["Object"], stretch.inputs[0])
+    stretch.inputs[1].default_value = LICK_SCALE
+    noise = node(tree, "ShaderNodeTexNoise", -1000, -800)
+    tree.links.new(stretch.outputs[0], noise.inputs["Vector"])
+    set_input(noise, "Scale", 1.0)
+    set_input(noise, "Detail", 3.0)
+    licks = node(tree, "ShaderNodeMapRange", -800, -800, clamp=True, interpolation_type="SMOOTHSTEP")
+    tree.links.new(noise.outputs["Fac"], licks.inputs["Value"])
+    set_input(licks, "From Min", 0.35)
+    set_input(licks, "From Max", 0.65)
+    shaped = node(tree, "ShaderNodeMath", -550, -650, operation="MULTIPLY")
+    tree.links.new(dens.outputs["Fac"], shaped.inputs[0])
+    tree.links.new(licks.outputs["Result"], shaped.inputs[1])
+    mul = node(tree, "ShaderNodeMath", -350, -450, operation="MULTIPLY")
+    tree.links.new(emit.inputs["Strength"].links[0].from_socket, mul.inputs[0])
+    tree.links.new(shaped.outputs[0], mul.inputs[1])
+    tree.links.new(mul.outputs[0], emit.inputs["Strength"])
+    out = node(tree, "ShaderNodeOutputMaterial", 200, 0)
+    tree.links.new(emit.outputs[0], out.inputs["Volume"])
+    if hasattr(mat, "cycles"):
+        mat.cycles.volume_step_rate = 2.0  # emission only: coarser steps look the same
+    return mat
+
+
+def light_material():
+    """"ThinBurn Fire Light": the glowing spheres of the light object."""
+    mat = _current(bpy.data.materials, LIGHT_MATERIAL)
+    if mat is not None:
+        return mat
+    mat = _stamp(bpy.data.materials.new(LIGHT_MATERIAL))
+    use_nodes(mat)
+    tree = mat.node_tree
+    tree.nodes.clear()
+    emit = _emission(tree, 0, LIGHT_STRENGTH, camera_only=False)
+    out = node(tree, "ShaderNodeOutputMaterial", 200, 0)
+    tree.links.new(emit.outputs[0], out.inputs["Surface"])
     return mat
 
 
@@ -139,8 +362,199 @@ def particle_cache_rows(frames) -> tuple:
     return count, rows
 
 
+def light_object_name(obj) -> str:
+    return f"ThinBurn Fire Light {obj.name}"
+
+
+# The panel's flame controls (obj.thinburn) -> the fire modifiers' inputs.
+FLAME_SETTINGS = {"flame_height": "Flame Height", "flame_intensity": "Intensity",
+                  "flame_temperature": "Flame Temperature"}
+
+
+def _inputs_of(md):
+    return {s.name: s.identifier for s in md.node_group.interface.items_tree
+            if getattr(s, "in_out", "") == "INPUT"}
+
+
+def sync_flame_settings(obj) -> None:
+    """Copy the sheet's flame settings onto its fire and light objects' modifiers."""
+    settings = getattr(obj, "thinburn", None)
+    for name in (fire_object_name(obj), light_object_name(obj)):
+        fire = bpy.data.objects.get(name)
+        md = None if fire is None else fire.modifiers.get(FIRE_GROUP)
+        if md is None or md.node_group is None:
+            continue
+        ident = _inputs_of(md)
+        for prop, socket_name in FLAME_SETTINGS.items():
+            if settings is not None and hasattr(settings, prop) and socket_name in ident:
+                md[ident[socket_name]] = float(getattr(settings, prop))
+        fire.update_tag()
+
+
+def _particle_object(obj, name, mesh, path, frame_start, output, material):
+    fire = bpy.data.objects.get(name)
+    if fire is not None and (fire.type != "MESH" or fire.data is not mesh):
+        bpy.data.objects.remove(fire)
+        fire = None
+    if fire is None:
+        fire = bpy.data.objects.new(name, mesh)
+        for coll in obj.users_collection:
+            coll.objects.link(fire)
+    fire.visible_shadow = False  # flames light the scene; they cast no shadow
+    md = ensure_modifier(fire, CACHE_MODIFIER, "MESH_CACHE", 0)
+    md.cache_format = "PC2"
+    md.filepath = path
+    md.frame_start = frame_start
+    md.interpolation = "NONE"  # slots are reused by different particles from frame to frame
+    gn = ensure_modifier(fire, FIRE_GROUP, "NODES", 1)
+    gn.node_group = fire_group()
+    ident = _inputs_of(gn)
+    gn[ident["Output"]] = output
+    gn[ident["Material"]] = material
+    return fire, gn, ident
+
+
+# --- embers -------------------------------------------------------------------------------------
+EMBER_GROUP_MATERIAL = "ThinBurn Ember"
+EMBER_CHANCE = 0.02    # per hot particle and frame, at Embers = 1
+EMBER_K = 1000.0       # K above ambient at birth: a bright orange spark
+EMBER_COOLING = 1.2    # 1/s: T falls to 1/e in 0.8 s
+EMBER_LIFETIME = (0.8, 2.0)  # s
+EMBER_BUOYANCY = 3.0   # m/s² at EMBER_K, upwards; gravity pulls 9.81 * EMBER_WEIGHT down
+EMBER_WEIGHT = 0.15
+EMBER_DRAG = 2.0       # 1/s
+EMBER_KICK = 0.25      # m/s, rms of a spark's initial velocity
+EMBER_FLUTTER = 0.3    # m/s², rms of the random push each frame
+EMBER_RADIUS = 0.0010  # m
+
+
+def ember_object_name(obj) -> str:
+    return f"ThinBurn Embers {obj.name}"
+
+
+def ember_frames(frames, dt: float, seed: int = 0, amount: float = 1.0, wind=(0.0, 0.0, 0.0)):
+    """Sparks thrown off by the fire: [(positions (k, 3), temperatures (k,))] per frame.
+
+    Each frame, every fire particle hotter than 0.6 T0 (young: it left the burning edge within
+    about 60 ms) throws a spark with probability EMBER_CHANCE * amount. A spark starts at its
+    particle, kicked in a random direction, rises by buoyancy against a little weight and drag,
+    flutters, cools exponentially and dies at the end of its lifetime or below 150 K above
+    ambient. Deterministic: the same particles, dt and seed give the same sparks. Each live
+    spark keeps its slot (its index in the frame's arrays) for its whole life; a dead slot is
+    reused, so the arrays are padded to the number of slots with temperature 0 (dead)."""
+    rng = np.random.default_rng([int(seed), 0xE3BE])
+    wind = np.asarray(wind, dtype=np.float64)
+    pos = np.zeros((0, 3))
+    vel = np.zeros((0, 3))
+    temp = np.zeros(0)
+    life = np.zeros(0)
+    out = []
+    for ppos, ptemp in frames:
+        ppos = np.asarray(ppos, dtype=np.float64).reshape(-1, 3)
+        ptemp = np.asarray(ptemp, dtype=np.float64).reshape(-1)
+        # move and cool the live sparks over the frame
+        alive = temp > 0
+        if alive.any():
+            lift = EMBER_BUOYANCY * temp[alive] / EMBER_K - 9.81 * EMBER_WEIGHT
+            acc = -EMBER_DRAG * (vel[alive] - wind)
+            acc[:, 2] += lift
+            acc += EMBER_FLUTTER * rng.standard_normal((int(alive.sum()), 3))
+            vel[alive] += acc * dt
+            pos[alive] += vel[alive] * dt
+            temp[alive] *= np.exp(-EMBER_COOLING * dt)
+            life[alive] -= dt
+            dead = alive & ((life <= 0) | (temp < 150.0))
+            temp[dead] = 0.0
+        # births from the young fire particles
+        young = np.flatnonzero(ptemp > 0.6 * FLAME_K)
+        draw = rng.random(len(young))
+        born = young[draw < EMBER_CHANCE * amount]
+        free = np.flatnonzero(temp <= 0)
+        extra = len(born) - len(free)
+        if extra > 0:
+            pos = np.vstack([pos, np.zeros((extra, 3))])
+            vel = np.vstack([vel, np.zeros((extra, 3))])
+            temp = np.concatenate([temp, np.zeros(extra)])
+            life = np.concatenate([life, np.zeros(extra)])
+            free = np.flatnonzero(temp <= 0)
+        slots = free[:len(born)]
+        pos[slots] = ppos[born]
+        kick = EMBER_KICK * rng.standard_normal((len(born), 3))
+        kick[:, 2] = np.abs(kick[:, 2]) + 0.5 * EMBER_KICK  # thrown up and out
+        vel[slots] = kick
+        temp[slots] = EMBER_K
+        life[slots] = rng.uniform(*EMBER_LIFETIME, size=len(born))
+        out.append((pos.astype(np.float32), temp.astype(np.float32)))
+    return out
+
+
+def ember_material():
+    """"ThinBurn Ember": blackbody emission of the spark's temperature, ~ (T / EMBER_K)^4."""
+    mat = _current(bpy.data.materials, EMBER_GROUP_MATERIAL)
+    if mat is not None:
+        return mat
+    mat = _stamp(bpy.data.materials.new(EMBER_GROUP_MATERIAL))
+    use_nodes(mat)
+    tree = mat.node_tree
+    tree.nodes.clear()
+    temp = node(tree, "ShaderNodeAttribute", -800, 0, attribute_type="GEOMETRY",
+                attribute_name=ATTR_TEMPERATURE)
+    kelvin = node(tree, "ShaderNodeMath", -550, 150, operation="ADD")
+    tree.links.new(temp.outputs["Fac"], kelvin.inputs[0])
+    kelvin.inputs[1].default_value = AMBIENT_K
+    body = node(tree, "ShaderNodeBlackbody", -350, 150)
+    tree.links.new(kelvin.outputs[0], body.inputs["Temperature"])
+    ratio = node(tree, "ShaderNodeMath", -550, -100, operation="DIVIDE")
+    tree.links.new(temp.outputs["Fac"], ratio.inputs[0])
+    ratio.inputs[1].default_value = EMBER_K
+    power = node(tree, "ShaderNodeMath", -350, -100, operation="POWER")
+    tree.links.new(ratio.outputs[0], power.inputs[0])
+    power.inputs[1].default_value = 4.0
+    scale = node(tree, "ShaderNodeMath", -150, -100, operation="MULTIPLY")
+    tree.links.new(power.outputs[0], scale.inputs[0])
+    scale.inputs[1].default_value = 40.0
+    emit = node(tree, "ShaderNodeEmission", 50, 50)
+    tree.links.new(body.outputs[0], emit.inputs["Color"])
+    tree.links.new(scale.outputs[0], emit.inputs["Strength"])
+    out = node(tree, "ShaderNodeOutputMaterial", 250, 0)
+    tree.links.new(emit.outputs[0], out.inputs["Surface"])
+    return mat
+
+
+def apply_embers(obj, sheet_pc2_path: str, frames, frame_start: float) -> None:
+    """Sparks from the baked fire particles: "ThinBurn Embers <sheet>", its own PC2 and a
+    point cloud (the "ThinBurn Fire" group's point output) that glows by temperature."""
+    settings = getattr(obj, "thinburn", None)
+    amount = float(getattr(settings, "embers", 1.0))
+    seed = int(getattr(settings, "seed", 0))
+    scene = bpy.context.scene
+    dt = scene.render.fps_base / scene.render.fps
+    sparks = ember_frames(frames, dt, seed=seed, amount=amount)
+    name = ember_object_name(obj)
+    old = bpy.data.objects.get(name)
+    if amount <= 0.0 or not any(len(t) for _, t in sparks):
+        if old is not None:
+            bpy.data.objects.remove(old)
+        return
+    count, rows = particle_cache_rows(sparks)
+    abs_path = bpy.path.abspath(sheet_pc2_path)[:-len(".pc2")] + "_embers.pc2"
+    with cache.PC2Writer(abs_path, 2 * count, start_frame=frame_start) as writer:
+        for sample in rows:
+            writer.append(sample)
+    mesh = old.data if old is not None and old.type == "MESH" else None
+    if mesh is None or len(mesh.vertices) != 2 * count:
+        mesh = bpy.data.meshes.new(name)
+        mesh.vertices.add(2 * count)
+    path = sheet_pc2_path[:-len(".pc2")] + "_embers.pc2"
+    embers, gn, ident = _particle_object(obj, name, mesh, path, frame_start, 2, ember_material())
+    gn[ident["Count"]] = count
+    gn[ident["Radius"]] = EMBER_RADIUS
+    gn[ident["Min Temperature"]] = 1.0  # dead slots have 0
+
+
 def apply_particles(obj, sheet_pc2_path: str, frames, frame_start: float) -> None:
-    """Write the fire particles to their own PC2 and an object "ThinBurn Fire <sheet>"."""
+    """Write the fire particles to their own PC2, the flame object "ThinBurn Fire <sheet>"
+    and the camera-invisible "ThinBurn Fire Light <sheet>" that lights the scene."""
     count, rows = particle_cache_rows(frames)
     abs_sheet = bpy.path.abspath(sheet_pc2_path)
     abs_fire = abs_sheet[:-len(".pc2")] + "_fire.pc2"
@@ -148,25 +562,165 @@ def apply_particles(obj, sheet_pc2_path: str, frames, frame_start: float) -> Non
         for sample in rows:
             writer.append(sample)
     name = fire_object_name(obj)
-    fire = bpy.data.objects.get(name)
-    if fire is None or fire.type != "MESH" or len(fire.data.vertices) != 2 * count:
-        if fire is not None:
-            bpy.data.objects.remove(fire)
+    old = bpy.data.objects.get(name)
+    mesh = old.data if old is not None and old.type == "MESH" else None
+    if mesh is None or len(mesh.vertices) != 2 * count:
         mesh = bpy.data.meshes.new(name)
         mesh.vertices.add(2 * count)
-        fire = bpy.data.objects.new(name, mesh)
-        fire.visible_shadow = False  # flames light the scene; they cast no shadow
-        for coll in obj.users_collection:
-            coll.objects.link(fire)
-    md = ensure_modifier(fire, CACHE_MODIFIER, "MESH_CACHE", 0)
-    md.cache_format = "PC2"
-    md.filepath = sheet_pc2_path[:-len(".pc2")] + "_fire.pc2"
-    md.frame_start = frame_start
-    md.interpolation = "NONE"  # slots are reused by different particles from frame to frame
-    gn = ensure_modifier(fire, FIRE_GROUP, "NODES", 1)
-    gn.node_group = fire_group()
-    ident = {s.name: s.identifier for s in gn.node_group.interface.items_tree
-             if getattr(s, "in_out", "") == "INPUT"}
+    path = sheet_pc2_path[:-len(".pc2")] + "_fire.pc2"
+    fire, gn, ident = _particle_object(obj, name, mesh, path, frame_start, 0, fire_material())
     gn[ident["Count"]] = count
-    gn[ident["Material"]] = fire_material()
-    fire.update_tag()
+    light, gn, ident = _particle_object(obj, light_object_name(obj), mesh, path, frame_start, 1,
+                                        light_material())
+    gn[ident["Count"]] = count
+    apply_embers(obj, sheet_pc2_path, frames, frame_start)
+    light.visible_camera = False
+    light.visible_glossy = False
+    light.visible_transmission = False
+    light.visible_volume_scatter = False
+    light.hide_select = True
+    sync_flame_settings(obj)
+
+
+# --- ash flakes -----------------------------------------------------------------------------------
+FLAKE_MATERIAL = "ThinBurn Ash"
+FLAKE_FALL = 0.35      # m/s: terminal speed of a light flake of char
+FLAKE_DRAG = 4.0       # 1/s: how fast it reaches the air's speed plus its fall
+FLAKE_FLUTTER = 0.12   # m/s: amplitude of its side-to-side swing
+FLAKE_SPIN = (2.0, 6.0)  # rad/s: tumbling
+FLAKE_DROP = 0.03      # m: how far a flake falls with the sheet below it still burning
+
+
+def flake_object_name(obj) -> str:
+    return f"ThinBurn Ash {obj.name}"
+
+
+def _rotation(axis, angle):
+    axis = axis / np.linalg.norm(axis)
+    x, y, z = axis
+    c, s = np.cos(angle), np.sin(angle)
+    return np.array([[c + x * x * (1 - c), x * y * (1 - c) - z * s, x * z * (1 - c) + y * s],
+                     [y * x * (1 - c) + z * s, c + y * y * (1 - c), y * z * (1 - c) - x * s],
+                     [z * x * (1 - c) - y * s, z * y * (1 - c) + x * s, c + z * z * (1 - c)]])
+
+
+def flake_frames(positions, faces, burnout, dt: float, share: float, seed: int = 0,
+                 floor=None, wind=(0.0, 0.0, 0.0)):
+    """Flakes of brittle char that break off where faces burn out.
+
+    ``positions`` (frames, n, 3) world positions of the baked sheet, ``faces`` a list of vertex
+    index lists, ``burnout`` (n,) frames since the first frame (cache.NEVER_FRAME: never).
+    A face that burns out within the bake (all its vertices past their burnout) sheds a flake
+    with probability ``share``: a quad of 70 % of the face's size, at the face, that from then
+    on falls at FLAKE_FALL, swings from side to side, tumbles, drifts with the wind and comes
+    to rest flat on ``floor`` (a world height; None: it keeps falling). Before it breaks off
+    the flake is folded into a point (invisible). Returns (frames, 4 * flakes, 3) corners
+    and the number of flakes. Deterministic per seed."""
+    positions = np.asarray(positions, dtype=np.float64)
+    n_frames = positions.shape[0]
+    rng = np.random.default_rng([int(seed), 0xA5A5])
+    wind = np.asarray(wind, dtype=np.float64)
+    picks = []
+    for face in faces:
+        when = float(np.max(burnout[list(face)]))
+        if when >= n_frames - 1 or rng.random() >= share:
+            continue
+        picks.append((list(face), when))
+    out = np.zeros((n_frames, 4 * len(picks), 3), dtype=np.float32)
+    for k, (face, when) in enumerate(picks):
+        f0 = int(np.ceil(when))
+        pts = positions[f0, face]
+        centre = pts.mean(axis=0)
+        size = 0.35 * float(np.mean(np.linalg.norm(pts - np.roll(pts, 1, axis=0), axis=1)))
+        normal = np.cross(pts[1] - pts[0], pts[-1] - pts[0])
+        if np.linalg.norm(normal) < 1e-12:
+            normal = np.array([0.0, 0.0, 1.0])
+        normal /= np.linalg.norm(normal)
+        u = pts[1] - pts[0]
+        u = u - normal * (u @ normal)
+        u /= max(np.linalg.norm(u), 1e-12)
+        v = np.cross(normal, u)
+        corners = size * np.array([u + v, -u + v, -u - v, u - v])  # about the centre
+        spin_axis = rng.standard_normal(3)
+        spin = rng.uniform(*FLAKE_SPIN) * rng.choice([-1.0, 1.0])
+        phase = rng.uniform(0, 2 * np.pi)
+        swing_dir = np.array([np.cos(phase), np.sin(phase), 0.0])
+        swing_rate = rng.uniform(2.0, 4.0)
+        out[:f0, 4 * k:4 * k + 4] = centre  # folded away until it breaks off
+        pos = centre.copy()
+        vel = np.zeros(3)
+        angle = 0.0
+        landed = False
+        for f in range(f0, n_frames):
+            t = (f - f0) * dt
+            if not landed:
+                target = wind + np.array([0.0, 0.0, -FLAKE_FALL])
+                target = target + FLAKE_FLUTTER * np.sin(swing_rate * t) * swing_dir * swing_rate / 3.0
+                vel += FLAKE_DRAG * (target - vel) * dt
+                if f > f0:
+                    pos = pos + vel * dt
+                    angle += spin * dt
+                rot = _rotation(spin_axis, angle)
+                shape = corners @ rot.T
+                if floor is not None and pos[2] + shape[:, 2].min() <= floor:
+                    landed = True
+                    flat = corners - np.outer(corners @ normal, normal)  # lie flat
+                    flat[:, 2] = 0.0
+                    pos = np.array([pos[0], pos[1], floor + 0.0005])
+                    shape = flat
+            out[f, 4 * k:4 * k + 4] = pos + shape
+    return out, len(picks)
+
+
+def flake_material():
+    """"ThinBurn Ash": black, rough, a little sheen of grey ash."""
+    mat = _current(bpy.data.materials, FLAKE_MATERIAL)
+    if mat is not None:
+        return mat
+    mat = _stamp(bpy.data.materials.new(FLAKE_MATERIAL))
+    use_nodes(mat)
+    bsdf = next(n for n in mat.node_tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled")
+    bsdf.inputs["Base Color"].default_value = (0.03, 0.028, 0.026, 1.0)
+    bsdf.inputs["Roughness"].default_value = 0.95
+    return mat
+
+
+def apply_flakes(obj, sheet_pc2_path: str, frame_start: float, burnout_frames, floor) -> None:
+    """Ash flakes for a finished bake: "ThinBurn Ash <sheet>" playing ``<name>_ash.pc2``."""
+    settings = getattr(obj, "thinburn", None)
+    share = float(getattr(settings, "flakes", 0.0))
+    name = flake_object_name(obj)
+    old = bpy.data.objects.get(name)
+    if old is not None:
+        bpy.data.objects.remove(old)
+    if share <= 0.0:
+        return
+    abs_sheet = bpy.path.abspath(sheet_pc2_path)
+    _, local = cache.read_pc2(abs_sheet)
+    m = np.array(obj.matrix_world, dtype=np.float64)
+    world = local @ m[:3, :3].T + m[:3, 3]
+    faces = [list(p.vertices) for p in obj.data.polygons]
+    since = np.asarray(burnout_frames, dtype=np.float64) - frame_start
+    scene = bpy.context.scene
+    dt = scene.render.fps_base / scene.render.fps
+    corners, count = flake_frames(world, faces, since, dt, share,
+                                  seed=int(getattr(settings, "seed", 0)), floor=floor)
+    if count == 0:
+        return
+    abs_path = abs_sheet[:-len(".pc2")] + "_ash.pc2"
+    with cache.PC2Writer(abs_path, 4 * count, start_frame=frame_start) as writer:
+        for sample in corners:
+            writer.append(sample)
+    mesh = bpy.data.meshes.new(name)
+    mesh.from_pydata(corners[0].tolist(), [], [(4 * k, 4 * k + 1, 4 * k + 2, 4 * k + 3)
+                                              for k in range(count)])
+    mesh.materials.append(flake_material())
+    flakes = bpy.data.objects.new(name, mesh)
+    for coll in obj.users_collection:
+        coll.objects.link(flakes)
+    md = ensure_modifier(flakes, CACHE_MODIFIER, "MESH_CACHE", 0)
+    md.cache_format = "PC2"
+    md.filepath = sheet_pc2_path[:-len(".pc2")] + "_ash.pc2"
+    md.frame_start = frame_start
+    md.interpolation = "LINEAR"
+    md.forward_axis, md.up_axis = "POS_Y", "POS_Z"

@@ -18,7 +18,7 @@ import numpy as np
 import bpy
 
 from . import cache
-from .fire import fire_object_name
+from .fire import apply_flakes, ember_object_name, fire_object_name, flake_object_name, light_object_name
 from .nodes import (ensure_modifier, interface_socket, link, map_range, new_group, node, set_input,
                     socket, use_nodes)
 
@@ -29,6 +29,7 @@ CHAR_GROUP = "ThinBurn Char"
 ATTR_IGNITE = "thinburn_ignite_time"
 ATTR_BURNOUT = "thinburn_burnout_time"
 ATTR_CHAR = "thinburn_char"
+ATTR_BURNING = "thinburn_burning"  # 1 on the burning band this frame (Mantaflow's emitter)
 PAPER = (0.85, 0.80, 0.70, 1.0)
 CHAR = (0.02, 0.015, 0.01, 1.0)
 EMBER = (1.0, 0.35, 0.05, 1.0)
@@ -56,6 +57,8 @@ def char_group():
     interface_socket(tree, "Char Point", "INPUT", "NodeSocketFloat", CHAR_POINT, 0.01, 1.0,
         desc="Share of the burn after which the material is fully charred")
     interface_socket(tree, "Roughness", "INPUT", "NodeSocketFloat", 0.9, 0.0, 1.0)
+    interface_socket(tree, "Burn Through", "INPUT", "NodeSocketFloat", 1.0, 0.0, 1.0,
+        desc="1: burnt-out areas become holes; 0: they stay as char (ash)")
 
     gi = node(tree, "NodeGroupInput", -900, 0)
     go = node(tree, "NodeGroupOutput", 700, 0)
@@ -92,8 +95,14 @@ def char_group():
     tree.links.new(bsdf.outputs[0], add.inputs[0])
     tree.links.new(emit.outputs[0], add.inputs[1])
     clear = node(tree, "ShaderNodeBsdfTransparent", 400, -150)
+    keep = node(tree, "ShaderNodeMath", 400, -300, operation="SUBTRACT")  # 1 - Burn Through
+    keep.inputs[0].default_value = 1.0
+    tree.links.new(gi.outputs["Burn Through"], keep.inputs[1])
+    solid = node(tree, "ShaderNodeMath", 550, -300, operation="MAXIMUM")
+    tree.links.new(alive.outputs[0], solid.inputs[0])
+    tree.links.new(keep.outputs[0], solid.inputs[1])
     out = node(tree, "ShaderNodeMixShader", 550, 0)
-    tree.links.new(alive.outputs[0], out.inputs[0])
+    tree.links.new(solid.outputs[0], out.inputs[0])
     tree.links.new(clear.outputs[0], out.inputs[1])
     tree.links.new(add.outputs[0], out.inputs[2])
     tree.links.new(out.outputs[0], go.inputs["Shader"])
@@ -101,6 +110,176 @@ def char_group():
     tree.links.new(ember.outputs[0], go.inputs["Ember"])
     tree.links.new(alive.outputs[0], go.inputs["Alpha"])
     return tree
+
+
+# --- burning any material -------------------------------------------------------------------------
+WRAP_GROUP = "ThinBurn Burn Wrap"
+WRAP_NODE = "ThinBurn Burn"  # the name of the inserted group node in a wrapped material
+
+
+def wrap_group():
+    """Shader node group "ThinBurn Burn Wrap": burns whatever shader comes in.
+
+    Shader -> mix toward a char BSDF as the burn chars it -> plus the ember glow at the burning
+    band -> mix with Transparent where burnt through. Where the mesh has no ThinBurn time
+    attributes (they read 0) it passes the shader through untouched, so a material shared with
+    other objects stays as it was on them."""
+    tree, fresh = new_group(WRAP_GROUP, "ShaderNodeTree")
+    if not fresh:
+        return tree
+    interface_socket(tree, "Shader", "INPUT", "NodeSocketShader", desc="The material's own shader")
+    interface_socket(tree, "Frame", "INPUT", "NodeSocketFloat", 1.0, desc="The scene frame (a driver: frame)")
+    interface_socket(tree, "Char Color", "INPUT", "NodeSocketColor", CHAR, desc="Colour of fully charred material")
+    interface_socket(tree, "Ember Strength", "INPUT", "NodeSocketFloat", 6.0, 0.0, 1000.0,
+        desc="Emission strength of the glowing edge")
+    interface_socket(tree, "Ember Width", "INPUT", "NodeSocketFloat", 0.3, 0.0, 1.0,
+        desc="Share of the burn, before burn-through, that glows")
+    interface_socket(tree, "Char Point", "INPUT", "NodeSocketFloat", CHAR_POINT, 0.01, 1.0,
+        desc="Share of the burn after which the material is fully charred")
+    interface_socket(tree, "Burn Through", "INPUT", "NodeSocketFloat", 1.0, 0.0, 1.0,
+        desc="1: burnt-out areas become holes; 0: they stay as char (ash)")
+    interface_socket(tree, "Shader", "OUTPUT", "NodeSocketShader")
+    L = tree.links.new
+    gi = node(tree, "NodeGroupInput", -1000, 0)
+    go = node(tree, "NodeGroupOutput", 1000, 0)
+    burn = node(tree, "ShaderNodeGroup", -700, 300, node_tree=char_group())
+    for key in ("Frame", "Char Color", "Ember Strength", "Ember Width", "Char Point"):
+        L(gi.outputs[key], burn.inputs[key])
+    ig = node(tree, "ShaderNodeAttribute", -700, -250, attribute_type="GEOMETRY", attribute_name=ATTR_IGNITE)
+    bo = node(tree, "ShaderNodeAttribute", -700, -400, attribute_type="GEOMETRY", attribute_name=ATTR_BURNOUT)
+    baked = node(tree, "ShaderNodeMath", -450, -300, operation="GREATER_THAN")  # 0 without a bake
+    L(bo.outputs["Fac"], baked.inputs[0])
+    L(ig.outputs["Fac"], baked.inputs[1])
+    dark = map_range(tree, -450, 300, (burn, "Char"), 0.0, (gi, "Char Point"), interp="SMOOTHSTEP")
+    dark_here = node(tree, "ShaderNodeMath", -250, 300, operation="MULTIPLY")
+    L(dark.outputs["Result"], dark_here.inputs[0])
+    L(baked.outputs[0], dark_here.inputs[1])
+    char_bsdf = node(tree, "ShaderNodeBsdfPrincipled", -250, 600)
+    L(gi.outputs["Char Color"], char_bsdf.inputs["Base Color"])
+    set_input(char_bsdf, "Roughness", 0.9)
+    charred = node(tree, "ShaderNodeMixShader", 0, 300)
+    L(dark_here.outputs[0], charred.inputs[0])
+    L(gi.outputs["Shader"], charred.inputs[1])
+    L(char_bsdf.outputs[0], charred.inputs[2])
+    kelvin = node(tree, "ShaderNodeBlackbody", -250, -50)
+    set_input(kelvin, "Temperature", EMBER_KELVIN)
+    glow = node(tree, "ShaderNodeMath", -250, -200, operation="MULTIPLY")
+    L(burn.outputs["Ember"], glow.inputs[0])
+    L(gi.outputs["Ember Strength"], glow.inputs[1])
+    glow_here = node(tree, "ShaderNodeMath", 0, -200, operation="MULTIPLY")
+    L(glow.outputs[0], glow_here.inputs[0])
+    L(baked.outputs[0], glow_here.inputs[1])
+    emit = node(tree, "ShaderNodeEmission", 200, -100)
+    L(kelvin.outputs[0], emit.inputs["Color"])
+    L(glow_here.outputs[0], emit.inputs["Strength"])
+    add = node(tree, "ShaderNodeAddShader", 400, 200)
+    L(charred.outputs[0], add.inputs[0])
+    L(emit.outputs[0], add.inputs[1])
+    # hole = baked * (1 - alpha) * Burn Through
+    gone = node(tree, "ShaderNodeMath", 200, -350, operation="SUBTRACT")
+    gone.inputs[0].default_value = 1.0
+    L(burn.outputs["Alpha"], gone.inputs[1])
+    gone_here = node(tree, "ShaderNodeMath", 400, -350, operation="MULTIPLY")
+    L(gone.outputs[0], gone_here.inputs[0])
+    L(baked.outputs[0], gone_here.inputs[1])
+    hole = node(tree, "ShaderNodeMath", 600, -350, operation="MULTIPLY")
+    L(gone_here.outputs[0], hole.inputs[0])
+    L(gi.outputs["Burn Through"], hole.inputs[1])
+    clear = node(tree, "ShaderNodeBsdfTransparent", 600, -100)
+    out = node(tree, "ShaderNodeMixShader", 800, 0)
+    L(hole.outputs[0], out.inputs[0])
+    L(add.outputs[0], out.inputs[1])
+    L(clear.outputs[0], out.inputs[2])
+    L(out.outputs[0], go.inputs["Shader"])
+    return tree
+
+
+def _surface_outputs(tree):
+    return [n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial"]
+
+
+def _drive_frame(socket_):
+    fcurve = socket_.driver_add("default_value")
+    fcurve.driver.type = "SCRIPTED"
+    fcurve.driver.expression = "frame"
+
+
+def is_burn_wrapped(mat) -> bool:
+    return mat is not None and mat.node_tree is not None and WRAP_NODE in mat.node_tree.nodes
+
+
+def add_burn_to_material(mat) -> str:
+    """Insert the burn (char, ember glow, burn-through) between a material's surface shader
+    and its output(s). Returns "added", "already" or why it could not."""
+    if mat is None:
+        return "an empty material slot"
+    if mat.name.startswith("ThinBurn "):
+        return "already"  # the bake's own material burns already
+    use_nodes(mat)
+    tree = mat.node_tree
+    if WRAP_NODE in tree.nodes:
+        return "already"
+    outputs = [o for o in _surface_outputs(tree) if o.inputs["Surface"].is_linked]
+    if not outputs:
+        return f"material '{mat.name}' has no shader connected to its Material Output's Surface"
+    source = outputs[0].inputs["Surface"].links[0].from_socket
+    x, y = outputs[0].location
+    wrap = node(tree, "ShaderNodeGroup", x, y - 250, node_tree=wrap_group())
+    wrap.name = wrap.label = WRAP_NODE
+    tree.links.new(source, wrap.inputs["Shader"])
+    for out in outputs:
+        if out.inputs["Surface"].links[0].from_socket == source:
+            tree.links.new(wrap.outputs["Shader"], out.inputs["Surface"])
+    _drive_frame(wrap.inputs["Frame"])
+    if hasattr(mat, "surface_render_method"):
+        mat.surface_render_method = "DITHERED"  # EEVEE: holes where burnt through
+    return "added"
+
+
+def remove_burn_from_material(mat) -> bool:
+    """Undo add_burn_to_material: reconnect the original shader and drop the node."""
+    if not is_burn_wrapped(mat):
+        return False
+    tree = mat.node_tree
+    wrap = tree.nodes[WRAP_NODE]
+    links = wrap.inputs["Shader"].links
+    source = links[0].from_socket if links else None
+    targets = [link.to_socket for link in wrap.outputs["Shader"].links]
+    if mat.node_tree.animation_data is not None:
+        for fc in list(mat.node_tree.animation_data.drivers):
+            if fc.data_path.startswith(f'nodes["{WRAP_NODE}"]'):
+                mat.node_tree.animation_data.drivers.remove(fc)
+    tree.nodes.remove(wrap)
+    if source is not None:
+        for target in targets:
+            tree.links.new(source, target)
+    return True
+
+
+def burn_materials(obj) -> list:
+    """add_burn_to_material for each of the object's slots; returns (slot index, result)."""
+    return [(i, add_burn_to_material(slot.material)) for i, slot in enumerate(obj.material_slots)]
+
+
+def sync_burnt(obj) -> None:
+    """Apply the sheet's *Burnt* setting (holes or ash) to its bake: the "ThinBurn Burn"
+    modifier's Remove Burnt and the Burn Through input of its burn nodes."""
+    settings = getattr(obj, "thinburn", None)
+    through = getattr(settings, "burnt", "HOLES") != "ASH"
+    md = obj.modifiers.get(BURN_MODIFIER)
+    if md is not None and md.node_group is not None:
+        for item in md.node_group.interface.items_tree:
+            if getattr(item, "in_out", "") == "INPUT" and item.name == "Remove Burnt":
+                md[item.identifier] = through
+    for slot in obj.material_slots:
+        mat = slot.material
+        if mat is None or mat.node_tree is None:
+            continue
+        for n in mat.node_tree.nodes:
+            if n.bl_idname == "ShaderNodeGroup" and n.node_tree is not None \
+                    and n.node_tree.name in (CHAR_GROUP, WRAP_GROUP) and "Burn Through" in n.inputs:
+                n.inputs["Burn Through"].default_value = 1.0 if through else 0.0
+    obj.update_tag()
 
 
 # --- the geometry-nodes group after the cache ---------------------------------------------------
@@ -138,9 +317,21 @@ def burn_group():
     tree.links.new(ember.outputs[0], socket(colour.inputs, "Factor_Float"))
     link(tree, charred, "Result_Color", colour, "A_Color")
     set_input(colour, "B_Color", EMBER)
+    # the burning band (lit, not burnt out) for a Mantaflow flow source: written into the
+    # vertex group of that name when the sheet has one (mantaflow.py), else an attribute
+    lit = node(tree, "FunctionNodeCompare", -750, -300, data_type="FLOAT", operation="GREATER_EQUAL")
+    link(tree, now, "Frame", lit, "A")
+    link(tree, ig, "Attribute", lit, "B")
+    band = node(tree, "FunctionNodeBooleanMath", -550, -300, operation="AND")
+    tree.links.new(lit.outputs[0], band.inputs[0])
+    tree.links.new(alive.outputs[0], band.inputs[1])
+    burning = node(tree, "GeometryNodeStoreNamedAttribute", -100, -300, data_type="FLOAT", domain="POINT")
+    set_input(burning, "Name", ATTR_BURNING)
+    link(tree, gi, "Geometry", burning, "Geometry")
+    tree.links.new(band.outputs[0], socket(burning.inputs, "Value"))
     store = node(tree, "GeometryNodeStoreNamedAttribute", 100, 0, data_type="FLOAT_COLOR", domain="POINT")
     set_input(store, "Name", ATTR_CHAR)
-    link(tree, gi, "Geometry", store, "Geometry")
+    link(tree, burning, "Geometry", store, "Geometry")
     link(tree, colour, "Result_Color", store, "Value")
     # A face goes only when all its vertices burnt out: capture the test on points, then read
     # it on faces (a boolean is true on a face when true on all its points).
@@ -208,6 +399,16 @@ def apply_bake(obj, pc2_path: str, frame_start: float, ignite, burnout) -> None:
             obj.material_slots[0].material = mat
         else:
             obj.data.materials.append(mat)
+    else:
+        burn_materials(obj)  # the sheet's own materials char, glow and burn through too
+    sync_burnt(obj)
+    floor = None
+    settings = getattr(obj, "thinburn", None)
+    if settings is not None and settings.floor_mode == "HEIGHT":
+        floor = float(settings.floor_height)
+    elif settings is not None and settings.floor_mode == "OBJECT" and settings.floor_object is not None:
+        floor = float(settings.floor_object.matrix_world.translation.z)
+    apply_flakes(obj, pc2_path, frame_start, burnout, floor)
     obj.update_tag()
     mesh.update()
 
@@ -230,6 +431,9 @@ def free_bake(obj) -> list:
         gone.append("modifier " + BURN_MODIFIER)
     if cache.remove_attributes(obj.data, (ATTR_IGNITE, ATTR_BURNOUT, ATTR_CHAR)):
         gone.append("attributes")
+    for slot in obj.material_slots:
+        if remove_burn_from_material(slot.material) and "burn from materials" not in gone:
+            gone.append("burn from materials")
     for i, slot in enumerate(obj.material_slots):
         mat = slot.material
         if mat is not None and mat.name == f"ThinBurn {obj.name}":
@@ -238,8 +442,11 @@ def free_bake(obj) -> list:
                 bpy.data.materials.remove(mat)
             gone.append("material")
             break
-    fire = bpy.data.objects.get(fire_object_name(obj))
-    if fire is not None:
+    for name in (fire_object_name(obj), light_object_name(obj), ember_object_name(obj),
+                 flake_object_name(obj)):
+        fire = bpy.data.objects.get(name)
+        if fire is None:
+            continue
         fmd = fire.modifiers.get(CACHE_MODIFIER)
         if fmd is not None and fmd.filepath:
             paths.add(bpy.path.abspath(fmd.filepath))
@@ -247,7 +454,8 @@ def free_bake(obj) -> list:
         bpy.data.objects.remove(fire)
         if mesh is not None and mesh.users == 0:
             bpy.data.meshes.remove(mesh)
-        gone.append("fire particles")
+        if "fire particles" not in gone:
+            gone.append("fire particles")
     for path in sorted(paths):
         for p in (path, path + ".partial"):
             if os.path.exists(p):

@@ -179,6 +179,36 @@ class THINBURN_OT_load_preset(bpy.types.Operator):
 CLASSES = (THINBURN_OT_bake, THINBURN_OT_free_bake, THINBURN_OT_load_preset)
 
 
+class THINBURN_OT_add_burn_to_material(bpy.types.Operator):
+    """Insert ThinBurn's char, ember glow and burn-through into each of the active mesh's
+    materials, around their own shader (the bake does this for slots that have a material)"""
+
+    bl_idname = "thinburn.add_burn_to_material"
+    bl_label = "Add Burn to Material"
+    bl_options = {"REGISTER", "UNDO"}
+
+    @classmethod
+    def poll(cls, context):
+        return _sheet(context) is not None
+
+    def execute(self, context):
+        obj = _sheet(context)
+        if not obj.material_slots:
+            self.report({"ERROR"}, f"ThinBurn: '{obj.name}' has no material slots: add a material "
+                                   "first, or bake, which makes a ThinBurn material")
+            return {"CANCELLED"}
+        results = materials.burn_materials(obj)
+        added = sum(1 for _, r in results if r == "added")
+        problems = [r for _, r in results if r not in ("added", "already")]
+        for text in problems:
+            self.report({"WARNING"}, f"ThinBurn: skipped {text}")
+        self.report({"INFO"}, f"ThinBurn: added the burn to {added} material(s)")
+        return {"FINISHED"}
+
+
+CLASSES = CLASSES + (THINBURN_OT_add_burn_to_material,)
+
+
 def register():
     for cls in CLASSES:
         bpy.utils.register_class(cls)

@@ -108,6 +108,31 @@ class PHYSICS_PT_thinburn_cache(ThinBurnPhysicsPanel, bpy.types.Panel):
             layout.label(text=f"Baked: {settings.baked_file}", icon="CHECKMARK")
 
 
+class PHYSICS_PT_thinburn_fire(ThinBurnPhysicsPanel, bpy.types.Panel):
+    bl_label = "Fire"
+    bl_parent_id = "PHYSICS_PT_thinburn"
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        settings = context.object.thinburn
+        layout.active = settings.enabled
+        if not settings.crumple:
+            layout.label(text="Flames and embers need Crumple: the fire particles come with it",
+                         icon="INFO")
+        layout.prop(settings, "flame_height")
+        layout.prop(settings, "flame_intensity")
+        layout.prop(settings, "flame_temperature")
+        layout.prop(settings, "embers")
+        layout.prop(settings, "burnt")
+        layout.prop(settings, "flakes")
+        layout.operator("thinburn.add_burn_to_material", icon="MATERIAL")
+        cycles = getattr(context.scene, "cycles", None)
+        if cycles is not None and not getattr(cycles, "volume_biased", True):
+            layout.label(text="Flames render far faster with Light Paths > Volumes > Biased",
+                         icon="INFO")
+
+
 class PHYSICS_PT_thinburn_advanced(ThinBurnPhysicsPanel, bpy.types.Panel):
     bl_label = "Advanced"
     bl_parent_id = "PHYSICS_PT_thinburn"
@@ -158,7 +183,7 @@ class OBJECT_PT_thinburn_igniter(bpy.types.Panel):
 
 
 CLASSES = (PHYSICS_PT_thinburn, PHYSICS_PT_thinburn_motion, PHYSICS_PT_thinburn_hold,
-           PHYSICS_PT_thinburn_cache,
+           PHYSICS_PT_thinburn_cache, PHYSICS_PT_thinburn_fire,
            PHYSICS_PT_thinburn_advanced, OBJECT_PT_thinburn_igniter)
 
 

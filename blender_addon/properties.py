@@ -76,6 +76,16 @@ def build_material(settings):
     return preset.with_(**changes)
 
 
+def _on_flame(self, context):
+    from . import fire  # bpy-heavy; imported when a flame setting changes
+    fire.sync_flame_settings(self.id_data)
+
+
+def _on_burnt(self, context):
+    from . import materials
+    materials.sync_burnt(self.id_data)
+
+
 def _field_props():
     props = {}
     default = thinburn.MATERIALS["paper"]
@@ -169,6 +179,33 @@ class ThinBurnSettings(bpy.types.PropertyGroup):
     cache_dir: StringProperty(
         name="Cache Folder", default="//thinburn_cache/", subtype="DIR_PATH", options=RELATIVE_PATH,
         description="Folder of the bake's PC2 file; '//' means next to the .blend file")
+
+    flame_height: FloatProperty(
+        name="Flame Height", default=0.06, min=0.0, soft_max=0.5, subtype="DISTANCE", unit="LENGTH",
+        update=_on_flame, options=STATIC,
+        description="How far the flames reach above the hottest fire particles (the fire "
+                    "object's modifier input; changes the baked fire without a new bake)")
+    flame_intensity: FloatProperty(
+        name="Flame Intensity", default=1.0, min=0.0, soft_max=20.0, update=_on_flame, options=STATIC,
+        description="Brightness of the flames and of the light they cast on the sheet")
+    flame_temperature: FloatProperty(
+        name="Flame Temperature", default=2300.0, min=800.0, soft_max=4000.0, update=_on_flame,
+        options=STATIC,
+        description="Colour temperature of the hottest flames, kelvin: about 1200 is deep red, "
+                    "1700 orange, 2300 (default) yellow-orange, 3000 and above yellow-white")
+
+    burnt: EnumProperty(
+        name="Burnt", default="HOLES", update=_on_burnt, options=STATIC,
+        description="What burnt-out parts of the sheet become (changes the bake without a new one)",
+        items=[("HOLES", "Burn Through", "Burnt-out areas become holes (the default)", 0),
+               ("ASH", "Char (Ash)", "Burnt-out areas stay as black char, and keep their shape", 1)])
+    flakes: FloatProperty(
+        name="Ash Flakes", default=0.0, min=0.0, max=1.0, options=STATIC, subtype="FACTOR",
+        description="Share of the burnt-out faces that break off as flakes of char, fall, "
+                    "flutter and land on the floor (0: none); read by the bake")
+    embers: FloatProperty(
+        name="Embers", default=1.0, min=0.0, soft_max=10.0, options=STATIC,
+        description="How many sparks the fire throws off (0: none); read by the bake")
 
     show_advanced: BoolProperty(name="Advanced", default=False, options=STATIC,
                                 description="Show the material and model parameters")

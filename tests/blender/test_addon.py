@@ -73,23 +73,38 @@ def test_manifest_and_bl_info(addon):
     assert callable(addon.register) and callable(addon.unregister)
 
 
-def test_fire_particles_become_an_emitting_point_cloud(addon, tmp_path):
-    """The output path for thinburn.Simulation.particles, fed with known particles."""
+def _modifier_input(obj, name):
+    md = obj.modifiers["ThinBurn Fire"]
+    ident = {s.name: s.identifier for s in md.node_group.interface.items_tree
+             if getattr(s, "in_out", "") == "INPUT"}
+    return md, ident[name]
+
+
+def test_fire_particles_become_flames_and_a_light(addon, tmp_path):
+    """The output path for thinburn.Simulation.particles, fed with known particles: the fire
+    object is a volume with density, tb_temperature and tb_flame grids; its Output 2 shows the
+    hot particles as points carrying the core's temperature; the light object is glowing
+    spheres hidden from the camera."""
     sheet = make_sheet()
     rng = np.random.default_rng(1)
     frames = []
-    for k in (3, 0, 5):  # K above ambient; below 150 K a particle is left out
+    for k in (3, 0, 5):  # K above ambient; below MIN_TEMPERATURE a particle is left out
         frames.append((rng.uniform(-0.1, 0.1, size=(k, 3)).astype(np.float32),
                        np.linspace(100.0, 900.0, k, dtype=np.float32)))
     pc2 = str(tmp_path / "Sheet.pc2")
     addon.fire.apply_particles(sheet, pc2, frames, frame_start=1.0)
     fire = bpy.data.objects["ThinBurn Fire Sheet"]
+    light = bpy.data.objects["ThinBurn Fire Light Sheet"]
+    assert not light.visible_camera and not light.visible_shadow and light.data is fire.data
     head, data = addon.cache.read_pc2(tmp_path / "Sheet_fire.pc2")
     assert head["points"] == 10 and head["samples"] == 3
+    md, output = _modifier_input(fire, "Output")
     for frame, (pos, temp) in enumerate(frames, start=1):
-        glowing = temp >= 150.0
+        glowing = temp >= addon.fire.MIN_TEMPERATURE
         pos, temp = pos[glowing], temp[glowing]
         bpy.context.scene.frame_set(frame)
+        md[output] = 2
+        fire.update_tag()
         dg = bpy.context.evaluated_depsgraph_get()
         geo = bpy.types.GeometrySet.from_evaluated_object(fire.evaluated_get(dg))
         cloud = geo.pointcloud
@@ -97,14 +112,28 @@ def test_fire_particles_become_an_emitting_point_cloud(addon, tmp_path):
         assert count == len(temp)
         if count:
             got_t = np.empty(count, dtype=np.float32)
-            cloud.attributes["temperature"].data.foreach_get("value", got_t)
+            cloud.attributes[addon.fire.ATTR_TEMPERATURE].data.foreach_get("value", got_t)
             got_p = np.empty(3 * count, dtype=np.float32)
             cloud.attributes["position"].data.foreach_get("vector", got_p)
             np.testing.assert_allclose(got_t, temp, rtol=1e-6)
             np.testing.assert_allclose(got_p.reshape(-1, 3), pos, atol=1e-6)
-            assert cloud.materials[0].name == "ThinBurn Fire"
-    assert addon.materials.free_bake(sheet)  # the fire object and its file go with the bake
+        md[output] = 0
+        fire.update_tag()
+        dg = bpy.context.evaluated_depsgraph_get()
+        geo = bpy.types.GeometrySet.from_evaluated_object(fire.evaluated_get(dg))
+        if count:
+            assert {g.name for g in geo.volume.grids} >= {"density", "tb_temperature", "tb_flame"}
+            assert geo.volume.materials[0].name == "ThinBurn Fire"
+        lgeo = bpy.types.GeometrySet.from_evaluated_object(light.evaluated_get(dg))
+        assert (lgeo.mesh is not None and len(lgeo.mesh.polygons) > 0) == bool(count)
+    # the panel's flame settings reach both modifiers
+    sheet.thinburn.flame_height = 0.1
+    for obj in (fire, light):
+        md, key = _modifier_input(obj, "Flame Height")
+        assert md[key] == pytest.approx(0.1)
+    assert addon.materials.free_bake(sheet)  # the fire objects and their file go with the bake
     assert "ThinBurn Fire Sheet" not in bpy.data.objects
+    assert "ThinBurn Fire Light Sheet" not in bpy.data.objects
     assert not (tmp_path / "Sheet_fire.pc2").exists()
 
 
@@ -162,5 +191,58 @@ def test_panels_draw_existing_properties_and_operators(addon):
             cls.draw(fake, ctx)
     for name in ("enabled", "material", "cells", "lattice", "igniter_collection", "pin_group",
                  "frame_start", "frame_end", "cache_dir", "thinburn.bake", "thinburn.free_bake",
-                 "mat_V0", "v_floor", "strength", "radius"):
+                 "mat_V0", "v_floor", "strength", "radius", "flame_height", "flame_intensity",
+                 "flame_temperature", "embers", "thinburn.add_burn_to_material"):
         assert name in drawn, name
+
+
+def test_embers_rise_cool_and_die_deterministically(addon):
+    """ember_frames, fed with a steady line of fire particles: sparks are born at the fire,
+    rise, cool and die; the same input and seed give the same sparks."""
+    rng = np.random.default_rng(3)
+    frames = []
+    for _ in range(48):
+        pos = np.c_[rng.uniform(-0.1, 0.1, 200), np.zeros(200), np.zeros(200)]
+        frames.append((pos.astype(np.float32), np.full(200, 850.0, np.float32)))
+    sparks = addon.fire.ember_frames(frames, 1 / 24, seed=5)
+    again = addon.fire.ember_frames(frames, 1 / 24, seed=5)
+    other = addon.fire.ember_frames(frames, 1 / 24, seed=6)
+    for (p, t), (q, u) in zip(sparks, again):
+        np.testing.assert_array_equal(p, q)
+        np.testing.assert_array_equal(t, u)
+    assert any(len(t) != len(u) or not np.array_equal(t, u) for (_, t), (_, u) in zip(sparks, other))
+    # follow slot 0 from the first frame with a live spark
+    start = next(i for i, (_, t) in enumerate(sparks) if len(t) and t[0] > 0)
+    life = [(sparks[i][0][0], sparks[i][1][0]) for i in range(start, len(sparks))
+            if len(sparks[i][1]) and sparks[i][1][0] > 0]
+    born_at = sparks[start][0][0]
+    assert abs(born_at[2]) < 1e-6 and abs(born_at[1]) < 1e-6  # on the line of fire
+    seen = 1
+    for (p0, t0), (p1, t1) in zip(life, life[1:]):
+        if t1 > t0:  # the slot was reused by a new spark
+            break
+        seen += 1
+    assert seen >= 10  # lives of 0.8 s and more: 19 frames at 24 fps
+    heights = [p[2] for p, _ in life[:seen]]
+    temps = [t for _, t in life[:seen]]
+    assert heights[-1] > 0.05, heights  # it rose
+    assert temps[-1] < 0.7 * temps[0]   # and cooled
+    alive = [int((t > 0).sum()) for _, t in sparks]
+    # about 200 young particles * 0.02 = 4 sparks a frame living ~1.4 s: 100-150 at once
+    assert 40 < alive[-1] < 300, alive[-1]
+
+
+def test_a_fire_group_and_material_from_an_older_add_on_are_replaced(addon, tmp_path):
+    """A .blend baked with the first add-on has a "ThinBurn Fire" group without the Output
+    input and a material reading `temperature`; a new bake must not reuse them."""
+    old_group = bpy.data.node_groups.new("ThinBurn Fire", "GeometryNodeTree")
+    old_mat = bpy.data.materials.new("ThinBurn Fire")
+    sheet = make_sheet()
+    frames = [(np.zeros((2, 3), np.float32), np.full(2, 800.0, np.float32))]
+    addon.fire.apply_particles(sheet, str(tmp_path / "Sheet.pc2"), frames, frame_start=1.0)
+    fire = bpy.data.objects["ThinBurn Fire Sheet"]
+    md = fire.modifiers["ThinBurn Fire"]
+    assert md.node_group is not old_group and old_group.name == "ThinBurn Fire (old)"
+    assert md.node_group.name == "ThinBurn Fire"
+    assert old_mat.name == "ThinBurn Fire (old)"
+    assert addon.fire.fire_material() is not old_mat

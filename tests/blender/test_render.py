@@ -81,3 +81,226 @@ def test_cycles_render_shows_char(addon, tmp_path):
     assert clean[centre].mean() > 0.3, "the unburnt sheet should render light"
     assert burnt[centre].mean() < 0.6 * clean[centre].mean(), (tmp_path, burnt[centre].mean())
     assert abs(burnt[corner].mean() - clean[corner].mean()) < 0.1 * clean[corner].mean()
+
+
+# --- the fire: tiny renders (64×48, 16 samples) measured pixel by pixel ----------------------
+FIRE_PX = (64, 48)
+
+
+def _render_rgb(path, frame):
+    scene = bpy.context.scene
+    scene.frame_set(frame)
+    scene.render.filepath = str(path)
+    bpy.ops.render.render(write_still=True)
+    img = bpy.data.images.load(str(path))
+    w, h = img.size
+    px = np.empty(w * h * 4, dtype=np.float32)
+    img.pixels.foreach_get(px)
+    bpy.data.images.remove(img)
+    return px.reshape(h, w, 4)[::-1, :, :3]
+
+
+def _fire_scene(tmp_path, size=0.2, frames=30):
+    """A burning sheet with its fire particles (Crumple on, on a floor), a top camera."""
+    sheet = make_sheet(n=17, size=size, z=0.0)
+    settings = setup_bake(sheet, frames=frames, cells=32, cache_dir=tmp_path / "cache")
+    settings.mat_V0 = 12.0  # mm/s: a wide ring of fire within a short bake
+    make_igniter(sheet, (0.0, 0.0, 0.0), lit_from=LIT_FROM, radius=0.03)
+    assert bpy.ops.thinburn.bake() == {"FINISHED"}
+    _camera_and_light(size)
+    scene = bpy.context.scene
+    scene.render.resolution_x, scene.render.resolution_y = FIRE_PX
+    scene.cycles.samples = 16
+    scene.cycles.volume_biased = True  # as docs/blender.md recommends for the flames
+    bpy.data.objects["Sun"].data.energy = 0.0  # only the fire lights the scene
+    return sheet
+
+
+def _annulus(h, w, r0, r1):
+    """Pixels whose distance from the image centre is in [r0, r1) (ortho scale 0.2 m / 64 px)."""
+    y, x = np.mgrid[0:h, 0:w]
+    r = np.hypot(x + 0.5 - w / 2, y + 0.5 - h / 2) * (0.2 / w)
+    return (r >= r0) & (r < r1)
+
+
+def test_fire_object_alone_glows_warm_at_the_burning_edge(addon, tmp_path):
+    sheet = _fire_scene(tmp_path)
+    fire = bpy.data.objects["ThinBurn Fire Sheet"]
+    assert fire.modifiers["ThinBurn Fire"].node_group is not None
+    sheet.hide_render = True  # the flames alone, over the 0.05 grey world
+    rgb = _render_rgb(tmp_path / "fire_alone.png", 30)
+    lum = rgb @ np.array([0.2126, 0.7152, 0.0722], dtype=np.float32)
+    h, w = lum.shape
+    background = float(np.median(lum[_annulus(h, w, 0.09, 1.0)]))  # beyond the sheet's corners
+    hot = lum > background + 0.1
+    print("fire alone: background", background, "hot pixels", int(hot.sum()),
+          "mean rgb there", rgb[hot].mean(axis=0))
+    # measured: background 0.247, 443 hot pixels of 3072, mean rgb there (0.75, 0.38, 0.25),
+    # mean luminance 0.45
+    assert hot.sum() >= 150, (tmp_path, int(hot.sum()))
+    red, green, blue = rgb[hot].mean(axis=0)
+    assert red > 2.0 * blue and red > 1.3 * green, (tmp_path, red, green, blue)
+    assert lum[hot].mean() > background + 0.12, (tmp_path, lum[hot].mean())
+
+
+def test_flames_light_the_sheet(addon, tmp_path):
+    sheet = _fire_scene(tmp_path)
+    bpy.data.objects["ThinBurn Fire Sheet"].hide_render = True  # the light it casts, alone
+    light = bpy.data.objects["ThinBurn Fire Light Sheet"]
+    lit = _render_rgb(tmp_path / "lit.png", 30)
+    light.hide_render = True
+    dark = _render_rgb(tmp_path / "dark.png", 30)
+    h, w, _ = lit.shape
+    near = _annulus(h, w, 0.06, 0.08)  # unburnt paper just outside the ring of fire
+    warm, grey = lit[near].mean(axis=0), dark[near].mean(axis=0)
+    print("flame light: rgb near the fire", warm, "without the light", grey)
+    # measured: (0.40, 0.21, 0.16) lit against (0.25, 0.22, 0.20) unlit
+    assert warm[0] - grey[0] > 0.1, (tmp_path, warm, grey)
+    assert warm[0] > 1.5 * warm[2], (tmp_path, warm)
+    assert sheet.hide_render is False
+
+
+def _own_material_sheet(tmp_path, size=0.2):
+    sheet = make_sheet(n=17, size=size, z=0.0)
+    mat = bpy.data.materials.new("Blue Card")
+    bsdf = mat.node_tree.nodes["Principled BSDF"]
+    bsdf.inputs["Base Color"].default_value = (0.05, 0.2, 0.8, 1.0)
+    sheet.data.materials.append(mat)
+    settings = setup_bake(sheet, frames=64, cells=32, cache_dir=tmp_path / "cache")
+    settings.mat_burn_duration = BURN_S
+    settings.mat_duration_noise = 0.0
+    settings.crumple = False  # the shading, in the camera
+    make_igniter(sheet, (0.0, 0.0, 0.0), lit_from=LIT_FROM, radius=0.05)
+    assert bpy.ops.thinburn.bake() == {"FINISHED"}
+    _camera_and_light(size)
+    scene = bpy.context.scene
+    scene.render.resolution_x, scene.render.resolution_y = FIRE_PX
+    scene.cycles.samples = 8
+    return sheet, mat
+
+
+def test_own_material_chars_where_burnt_and_keeps_its_colour_elsewhere(addon, tmp_path):
+    sheet, mat = _own_material_sheet(tmp_path)
+    assert sheet.material_slots[0].material is mat  # the bake kept the material, and wrapped it
+    assert addon.materials.is_burn_wrapped(mat)
+    assert mat.node_tree.nodes["Principled BSDF"].inputs["Base Color"].default_value[2] == pytest.approx(0.8)
+    first = float(point_attribute(sheet, "thinburn_ignite_time").min())
+    frame = int(round(first + 0.5 * BURN_S * bpy.context.scene.render.fps))
+    clean = _render_rgb(tmp_path / "own_unburnt.png", LIT_FROM - 1)
+    burnt = _render_rgb(tmp_path / "own_burnt.png", frame)
+    h, w, _ = clean.shape
+    centre = _annulus(h, w, 0.0, 0.015)
+    corner = (slice(0, 6), slice(0, 8))
+    c0, c1 = clean[centre].mean(axis=0), burnt[centre].mean(axis=0)
+    k0, k1 = clean[corner].mean(axis=(0, 1)), burnt[corner].mean(axis=(0, 1))
+    # the ember band: the last 30 % of the centre's burn, before it burns through
+    glow = _render_rgb(tmp_path / "own_glow.png", int(round(first + 0.85 * BURN_S * 24)))[centre].mean(axis=0)
+    print("own material: centre", c0, "->", c1, "glowing", glow, "corner", k0, "->", k1)
+    # measured: centre (0.49, 0.63, 0.97) -> (0.21, 0.19, 0.18) charred, (1.0, 0.99, 0.18) glowing
+    # (saturated by the Standard view transform); corner unchanged
+    assert c0[2] > 1.5 * c0[0], "the unburnt card should render blue"
+    assert c1.sum() < 0.5 * c0.sum(), (tmp_path, c0, c1)             # charred
+    np.testing.assert_allclose(k1, k0, atol=0.05)                      # untouched, still blue
+    assert k1[2] > 1.5 * k1[0]
+    assert glow[0] > 2.0 * glow[2] and glow[0] > c1[0] + 0.2, (tmp_path, glow)  # a red-hot edge
+
+
+def test_add_burn_to_material_operator_wraps_once_and_free_unwraps(addon, tmp_path):
+    sheet = make_sheet()
+    mat = bpy.data.materials.new("Mine")
+    sheet.data.materials.append(mat)
+    out = mat.node_tree.nodes["Material Output"]
+    bsdf = mat.node_tree.nodes["Principled BSDF"]
+    assert bpy.ops.thinburn.add_burn_to_material() == {"FINISHED"}
+    assert bpy.ops.thinburn.add_burn_to_material() == {"FINISHED"}  # idempotent
+    wraps = [n for n in mat.node_tree.nodes if n.bl_idname == "ShaderNodeGroup"]
+    assert len(wraps) == 1
+    assert out.inputs["Surface"].links[0].from_node == wraps[0]
+    assert wraps[0].inputs["Shader"].links[0].from_node == bsdf
+    assert addon.materials.remove_burn_from_material(mat)
+    assert out.inputs["Surface"].links[0].from_node == bsdf
+    empty = make_sheet("Bare")
+    with pytest.raises(RuntimeError, match="no material slots"):
+        bpy.ops.thinburn.add_burn_to_material()
+    assert empty.name == "Bare"
+
+
+def _points(obj, frame):
+    bpy.context.scene.frame_set(frame)
+    dg = bpy.context.evaluated_depsgraph_get()
+    geo = bpy.types.GeometrySet.from_evaluated_object(obj.evaluated_get(dg))
+    cloud = geo.pointcloud
+    if cloud is None:
+        return np.zeros((0, 3), np.float32)
+    co = np.empty(3 * len(cloud.points), dtype=np.float32)
+    cloud.attributes["position"].data.foreach_get("vector", co)
+    return co.reshape(-1, 3)
+
+
+def test_embers_exist_and_move_between_frames(addon, tmp_path):
+    _fire_scene(tmp_path)
+    embers = bpy.data.objects["ThinBurn Embers Sheet"]
+    a, b = _points(embers, 24), _points(embers, 28)
+    print("embers: frame 24", len(a), "mean z", a[:, 2].mean() if len(a) else None,
+          "frame 28", len(b), "mean z", b[:, 2].mean() if len(b) else None)
+    # measured: 29 sparks at frame 24 (mean height 0.16 m), 32 at frame 28 (0.18 m)
+    assert len(a) >= 8 and len(b) >= 8, (len(a), len(b))
+    assert a.shape != b.shape or not np.allclose(a, b)
+    assert b[:, 2].max() > 0.02  # sparks rise above the sheet (at z = 0)
+
+
+def test_ash_keeps_burnt_areas_as_char_instead_of_holes(addon, tmp_path):
+    sheet, mat = _own_material_sheet(tmp_path)
+    first = float(point_attribute(sheet, "thinburn_ignite_time").min())
+    frame = int(round(first + 1.2 * BURN_S * 24))  # the centre has burnt out
+    assert frame <= 64
+    faces = len(sheet.data.polygons)
+    bpy.context.scene.world.node_tree.nodes["Background"].inputs["Color"].default_value = (0.0, 0.3, 0.0, 1.0)
+    holes = _render_rgb(tmp_path / "holes.png", frame)
+    dg = bpy.context.evaluated_depsgraph_get()
+    assert len(sheet.evaluated_get(dg).to_mesh().polygons) < faces
+    sheet.evaluated_get(dg).to_mesh_clear()
+    sheet.thinburn.burnt = "ASH"
+    ash = _render_rgb(tmp_path / "ash.png", frame)
+    dg = bpy.context.evaluated_depsgraph_get()
+    assert len(sheet.evaluated_get(dg).to_mesh().polygons) == faces
+    sheet.evaluated_get(dg).to_mesh_clear()
+    h, w, _ = ash.shape
+    centre = _annulus(h, w, 0.0, 0.015)
+    through, char = holes[centre].mean(axis=0), ash[centre].mean(axis=0)
+    print("ash: centre rgb with holes", through, "as ash", char)
+    # measured: holes (0, 0.58, 0): the green world shows through; ash (0.20, 0.22, 0.17)
+    assert through[1] > 0.4 and through[0] < 0.1, (tmp_path, through)
+    assert char[1] < 0.35 and abs(char[1] - char[0]) < 0.1, (tmp_path, char)  # black char stays
+
+
+def test_ash_flakes_break_off_fall_flutter_and_land_on_the_floor(addon, tmp_path):
+    sheet = make_sheet(n=9, size=0.2, z=0.1)
+    settings = setup_bake(sheet, frames=48, cells=32, cache_dir=tmp_path / "cache", floor=False)
+    settings.crumple = False  # the sheet stays at z = 0.1; the flakes fall to the floor at 0
+    settings.floor_mode, settings.floor_height = "HEIGHT", 0.0
+    settings.mat_V0, settings.mat_burn_duration = 20.0, 0.4
+    settings.flakes = 0.5
+    make_igniter(sheet, (0.0, 0.0, 0.1), lit_from=1, radius=0.05)
+    assert bpy.ops.thinburn.bake() == {"FINISHED"}
+    flakes = bpy.data.objects["ThinBurn Ash Sheet"]
+    n = len(flakes.data.polygons)
+    head, data = addon.cache.read_pc2(tmp_path / "cache" / "Sheet_ash.pc2")
+    assert n >= 3 and head["points"] == 4 * n and head["samples"] == 48
+    centres = data.reshape(48, n, 4, 3).mean(axis=2)  # (frames, flakes, 3)
+    sizes = np.ptp(data.reshape(48, n, 4, 3), axis=2).max(axis=2)
+    broke = np.argmax(sizes > 1e-6, axis=0)  # the frame each flake breaks off
+    k = int(np.argmin(broke))
+    z = centres[broke[k]:, k, 2]
+    print("flakes:", n, "first breaks off at frame", broke[k] + 1, "heights", z[:8], "...", z[-1])
+    # measured: 9 flakes; the first breaks off at frame 11 and falls 0.1, 0.096, 0.089, ... to
+    # rest at 0.0005 on the floor
+    assert z[0] == pytest.approx(0.1, abs=0.01)        # it starts at the sheet
+    assert np.all(np.diff(z) <= 1e-6) and z[-1] == pytest.approx(0.0005, abs=1e-4)  # falls, lands
+    assert np.ptp(centres[broke[k]:, k, :2], axis=0).max() > 0.002  # and drifts sideways
+    _, sheet_positions = addon.cache.read_pc2(tmp_path / "cache" / "Sheet.pc2")  # identity transform
+    again, count = addon.fire.flake_frames(
+        sheet_positions, [list(p.vertices) for p in sheet.data.polygons],
+        point_attribute(sheet, "thinburn_burnout_time") - 1.0, 1 / 24, 0.5, seed=0, floor=0.0)
+    np.testing.assert_allclose(again, data, atol=1e-6)  # deterministic: the same flakes
+    assert addon.materials.free_bake(sheet) and "ThinBurn Ash Sheet" not in bpy.data.objects
