@@ -14,10 +14,10 @@ namespace {
 
 constexpr double kParamSlack = 1e-9;
 // deform's work: points go in blocks of kDeformBlock (one call of the vectorised kernel each);
-// one point costs about 2 of kParallelWork's units (threads.hpp), so meshes below about 16k
+// one point costs about 1 of kParallelWork's units (threads.hpp), so meshes below about 32k
 // vertices deform on one thread.
 constexpr Eigen::Index kDeformBlock = 1024;
-constexpr long kPointCost = 2;
+constexpr long kPointCost = 1;
 
 // Weights of one lattice axis at coordinate x over the three nodes base, base+1, base+2
 // (base + 2 may be unused: weight 0). Linear: two nodes.

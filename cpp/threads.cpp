@@ -13,6 +13,7 @@
 #include <stdexcept>
 #include <string>
 #include <thread>
+#include <unordered_map>
 #include <vector>
 
 namespace thinburn {
@@ -70,8 +71,9 @@ class Pool {
   bool try_run(long chunks, int helpers, void (*task)(void*, long), void* ctx) {
     bool expected = false;
     if (!busy_.compare_exchange_strong(expected, true, std::memory_order_acquire)) return false;
-    if (skip_ > 0) {  // helpers were of no use lately: run alone for a while
-      --skip_;
+    Site& site = sites_[task];  // one entry per parallel_for call site (its task function)
+    if (site.skip > 0) {  // helpers were of no use at this loop lately: run it alone for a while
+      --site.skip;
       busy_.store(false, std::memory_order_release);
       return false;
     }
@@ -107,7 +109,7 @@ class Pool {
       std::lock_guard<std::mutex> lock(mutex_);
       job_.reset();
     }
-    learn(mine < chunks, Clock::now() - own_end, own_end - start);
+    learn(site, mine < chunks, Clock::now() - own_end, own_end - start);
     busy_.store(false, std::memory_order_release);
     if (job->error) std::rethrow_exception(job->error);
     return true;
@@ -120,19 +122,24 @@ class Pool {
   static Pool& instance() { return *instance_; }
 
  private:
-  // Helpers are of use when they took chunks and the caller did not wait long for them. When
-  // they are not (every core busy: a woken helper gets no core in time, or loses it mid-chunk),
-  // the next 2^k - 1 loops run on the caller alone, k growing with each useless loop in a row,
-  // so a busy machine pays for a probe now and then instead of a wake-up at every loop.
-  void learn(bool helped, std::chrono::steady_clock::duration waited,
-             std::chrono::steady_clock::duration worked) {
-    constexpr int kMaxBackoff = 10;  // at most 1023 loops alone between probes
+  // Helpers are of use at a loop when they took chunks and the caller did not wait long for
+  // them. When they are not (a loop too short for a sleeping helper to wake in time, or every
+  // core busy: a woken helper gets no core in time, or loses it mid-chunk), the next 2^k - 1
+  // runs of that loop (its call site) run on the caller alone, k growing with each useless run
+  // in a row, so a busy machine pays for a probe now and then instead of a wake-up every time,
+  // and a short loop's verdict does not keep helpers from a long one.
+  struct Site {
+    int backoff = 0, skip = 0;
+  };
+  static void learn(Site& site, bool helped, std::chrono::steady_clock::duration waited,
+                    std::chrono::steady_clock::duration worked) {
+    constexpr int kMaxBackoff = 10;  // at most 1023 runs alone between probes
     if (helped && waited * 4 <= worked) {
-      backoff_ = 0;
+      site.backoff = 0;
       return;
     }
-    backoff_ = std::min(backoff_ + 1, kMaxBackoff);
-    skip_ = (1 << backoff_) - 1;
+    site.backoff = std::min(site.backoff + 1, kMaxBackoff);
+    site.skip = (1 << site.backoff) - 1;
   }
 
   void grow(int helpers) {
@@ -157,8 +164,9 @@ class Pool {
 
   void helper_main(bool may_watch) {
     std::uint64_t seen = generation_.load(std::memory_order_acquire);
+    bool did_work = false;
     for (;;) {
-      if (may_watch) watch(seen);
+      if (may_watch && did_work) watch(seen);
       std::shared_ptr<Job> job;
       {
         std::unique_lock<std::mutex> lock(mutex_);
@@ -168,7 +176,9 @@ class Pool {
         seen = generation_.load(std::memory_order_acquire);
         job = job_;
       }
-      if (job && job->seats.fetch_sub(1, std::memory_order_relaxed) > 0) work_on(*job);
+      // A helper that found the loop already done goes back to sleep at once: it came late
+      // (a busy machine, or a short loop), and watching would only take a core from the caller.
+      did_work = job && job->seats.fetch_sub(1, std::memory_order_relaxed) > 0 && work_on(*job) > 0;
     }
   }
 
@@ -180,7 +190,7 @@ class Pool {
   std::shared_ptr<Job> job_;
   std::vector<std::thread::id> workers_;
   int sleeping_ = 0;
-  int backoff_ = 0, skip_ = 0;  // touched only by the thread that holds busy_
+  std::unordered_map<void (*)(void*, long), Site> sites_;  // touched only by busy_'s holder
 };
 
 Pool* Pool::instance_ = [] {

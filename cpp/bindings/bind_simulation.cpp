@@ -148,7 +148,14 @@ void define_simulation(py::module_& m) {
       .def("fringe", &S::fringe)
       .def("cell_positions", &S::cell_positions)
       .def("cell_rest_positions", [](const S& s) { return s.sheet().cell_rest(); })
-      .def("vertex_positions", &S::vertex_positions)
+      .def("vertex_positions",
+           [](const S& s, int threads) {
+             // The mesh's FFD is the one parallel loop outside a step: the Simulation's count too.
+             py::gil_scoped_release release;
+             ScopedThreads scope(threads);
+             return s.vertex_positions();
+           },
+           py::arg("threads"))
       .def("vertex_char", &S::vertex_char)
       .def("vertex_ignition_times", &S::vertex_ignition_times)
       .def("vertex_burnout_times", &S::vertex_burnout_times)

@@ -405,7 +405,7 @@ class Simulation:
 
     def vertex_positions(self) -> np.ndarray:
         """(n, 3) current positions of the input mesh's vertices."""
-        return self._sim.vertex_positions()
+        return self._sim.vertex_positions(self._threads)
 
     def vertex_char(self) -> np.ndarray:
         """(n,) char amount in [0, 1] per input vertex, interpolated from the cells."""
