@@ -16,7 +16,7 @@ import os
 
 import numpy as np
 
-from ._bench_perf import _pyplot, best_frames, frame_summary, save_figure
+from ._bench_perf import _pyplot, frame_summary, interleaved_best_frames, save_figure
 from ._threads import hardware_threads
 from .demo import build, default_scene
 from .materials import MATERIALS
@@ -51,27 +51,13 @@ def loaded_cores(n: int):
                 p.terminate()
 
 
-def _interleaved(makers, frames, warmup, repeat):
-    """best_frames for several thread counts, their runs taken in turn (1, n, 1, n, ...) so that
-    a change in the machine's other load between runs biases no count."""
-    best = {}
-    for _ in range(max(1, repeat)):
-        for threads, make in makers.items():
-            step_ms, pos_ms, stats, sim = best_frames(make, frames, warmup, 1)
-            if threads in best:
-                b = best[threads]
-                step_ms, pos_ms, stats = np.minimum(b[0], step_ms), np.minimum(b[1], pos_ms), b[2]
-            best[threads] = (step_ms, pos_ms, stats, sim)
-    return best
-
-
 def _time_scenes(scenes, counts, frames, warmup, repeat, load, log):
     rows = []
     for material, cells, verts in scenes:
         scene = default_scene(material, vertices=verts)
         big = cells > 128 or verts > 20000
         makers = {t: (lambda t=t: build(scene, material, cells=cells, threads=t)) for t in counts}
-        timed = _interleaved(makers, frames // 2 if big else frames, warmup // 2 if big else warmup, repeat)
+        timed = interleaved_best_frames(makers, frames // 2 if big else frames, warmup // 2 if big else warmup, repeat)
         for threads, (step_ms, pos_ms, stats, sim) in timed.items():
             s = frame_summary(step_ms, pos_ms, stats)
             name = f"{material} {cells}² {len(scene.vertices) // 1000}k"

@@ -31,7 +31,8 @@ Writes DIR/results.json (rows {part, method, resolution or dt, error or seconds,
 rows hold slopes and ratios), DIR/meta.json, DIR/speed_accuracy.png, DIR/stability.png,
 DIR/performance.png, DIR/scaling.png and DIR/threads.png. One progress line per measurement on stderr.
 Seconds of kernels are the best of --repeat runs (default 3; ffd at least 10). Frames: each
-frame's fastest time over --repeat runs of the same deterministic simulation (--quick and the
+frame's fastest time over --repeat runs of the same deterministic simulation, the thread counts' runs
+taken in turn (--quick and the
 default-lattice active runs: 1 run). Everything runs on --threads threads (default: all
 logical cores), set with thinburn.set_threads; meta.json keeps the load average.
 """
