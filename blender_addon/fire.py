@@ -290,17 +290,26 @@ def _emission(tree, x, strength, camera_only):
     return emit
 
 
+def _empty_material(name, clear=True):
+    """(material, None) when the current stamped material of that name exists; else a new one,
+    stamped, with nodes (cleared unless clear is False): (material, its node tree)."""
+    mat = _current(bpy.data.materials, name)
+    if mat is not None:
+        return mat, None
+    mat = _stamp(bpy.data.materials.new(name))
+    use_nodes(mat)
+    if clear:
+        mat.node_tree.nodes.clear()
+    return mat, mat.node_tree
+
+
 def fire_material():
     """"ThinBurn Fire": the flame volume. Emission of the colour temperature tb_temperature,
     strength tb_flame (Intensity * (T / T0)^4) * density, shown to the camera only (the light
     object casts the flames' light)."""
-    mat = _current(bpy.data.materials, FIRE_MATERIAL)
-    if mat is not None:
+    mat, tree = _empty_material(FIRE_MATERIAL)
+    if tree is None:
         return mat
-    mat = _stamp(bpy.data.materials.new(FIRE_MATERIAL))
-    use_nodes(mat)
-    tree = mat.node_tree
-    tree.nodes.clear()
     emit = _emission(tree, 0, FLAME_STRENGTH, camera_only=True)
     dens = node(tree, "ShaderNodeAttribute", -800, -550, attribute_type="GEOMETRY", attribute_name="density")
     # licks: a noise stretched upwards breaks the glow into tongues
@@ -332,13 +341,9 @@ def fire_material():
 
 def light_material():
     """"ThinBurn Fire Light": the glowing spheres of the light object."""
-    mat = _current(bpy.data.materials, LIGHT_MATERIAL)
-    if mat is not None:
+    mat, tree = _empty_material(LIGHT_MATERIAL)
+    if tree is None:
         return mat
-    mat = _stamp(bpy.data.materials.new(LIGHT_MATERIAL))
-    use_nodes(mat)
-    tree = mat.node_tree
-    tree.nodes.clear()
     emit = _emission(tree, 0, LIGHT_STRENGTH, camera_only=False)
     out = node(tree, "ShaderNodeOutputMaterial", 200, 0)
     tree.links.new(emit.outputs[0], out.inputs["Surface"])
@@ -490,13 +495,9 @@ def ember_frames(frames, dt: float, seed: int = 0, amount: float = 1.0, wind=(0.
 
 def ember_material():
     """"ThinBurn Ember": blackbody emission of the spark's temperature, ~ (T / EMBER_K)^4."""
-    mat = _current(bpy.data.materials, EMBER_GROUP_MATERIAL)
-    if mat is not None:
+    mat, tree = _empty_material(EMBER_GROUP_MATERIAL)
+    if tree is None:
         return mat
-    mat = _stamp(bpy.data.materials.new(EMBER_GROUP_MATERIAL))
-    use_nodes(mat)
-    tree = mat.node_tree
-    tree.nodes.clear()
     temp = node(tree, "ShaderNodeAttribute", -800, 0, attribute_type="GEOMETRY",
                 attribute_name=ATTR_TEMPERATURE)
     kelvin = node(tree, "ShaderNodeMath", -550, 150, operation="ADD")
@@ -674,11 +675,9 @@ def flake_frames(positions, faces, burnout, dt: float, share: float, seed: int =
 
 def flake_material():
     """"ThinBurn Ash": black, rough, a little sheen of grey ash."""
-    mat = _current(bpy.data.materials, FLAKE_MATERIAL)
-    if mat is not None:
+    mat, tree = _empty_material(FLAKE_MATERIAL, clear=False)
+    if tree is None:
         return mat
-    mat = _stamp(bpy.data.materials.new(FLAKE_MATERIAL))
-    use_nodes(mat)
     bsdf = next(n for n in mat.node_tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled")
     bsdf.inputs["Base Color"].default_value = (0.03, 0.028, 0.026, 1.0)
     bsdf.inputs["Roughness"].default_value = 0.95

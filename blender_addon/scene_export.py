@@ -15,6 +15,7 @@ import numpy as np
 from bpy.props import StringProperty
 
 from . import inputs, properties
+from .file_export import ExportOperator, registrar
 from .inputs import BakeError
 from .job import core_supports
 from .worker import path_ignitions
@@ -80,7 +81,7 @@ def write_scene(obj, path, context=None) -> str:
     return save_scene(scene_spec(obj, context), path)
 
 
-class THINBURN_OT_export_scene(bpy.types.Operator):
+class THINBURN_OT_export_scene(ExportOperator, bpy.types.Operator):
     """Write the active sheet's bake inputs to a thinburn scene file, for wedges and farms"""
 
     bl_idname = "thinburn.export_scene"
@@ -95,30 +96,11 @@ class THINBURN_OT_export_scene(bpy.types.Operator):
         obj = context.active_object
         return obj is not None and obj.type == "MESH"
 
-    def execute(self, context):
-        path = bpy.path.abspath(self.filepath)
-        try:
-            write_scene(context.active_object, path, context)
-        except (BakeError, ValueError, OSError) as exc:
-            self.report({"ERROR"}, f"ThinBurn: {exc}")
-            return {"CANCELLED"}
-        self.report({"INFO"}, f"ThinBurn: wrote {path}")
-        return {"FINISHED"}
+    menu_label = "ThinBurn Scene (.json, .npz)"
+    errors = (BakeError, ValueError, OSError)
 
-    def invoke(self, context, event):
-        context.window_manager.fileselect_add(self)
-        return {"RUNNING_MODAL"}
+    def write(self, context, path):
+        write_scene(context.active_object, path, context)
 
 
-def _menu(self, context):
-    self.layout.operator(THINBURN_OT_export_scene.bl_idname, text="ThinBurn Scene (.json, .npz)")
-
-
-def register():
-    bpy.utils.register_class(THINBURN_OT_export_scene)
-    bpy.types.TOPBAR_MT_file_export.append(_menu)  # File > Export
-
-
-def unregister():
-    bpy.types.TOPBAR_MT_file_export.remove(_menu)
-    bpy.utils.unregister_class(THINBURN_OT_export_scene)
+register, unregister = registrar(THINBURN_OT_export_scene)

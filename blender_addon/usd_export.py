@@ -18,6 +18,7 @@ from bpy.props import StringProperty
 from . import cache
 from .fire import CACHE_MODIFIER as FIRE_CACHE_MODIFIER
 from .fire import fire_object_name
+from .file_export import ExportOperator, registrar
 from .inputs import BakeError
 from .materials import ATTR_BURNOUT, ATTR_IGNITE
 
@@ -93,7 +94,7 @@ def export_object(obj, path, scene=None) -> str:
                      transform=np.array(obj.matrix_world, dtype=np.float64))
 
 
-class THINBURN_OT_export_usd(bpy.types.Operator):
+class THINBURN_OT_export_usd(ExportOperator, bpy.types.Operator):
     """Export the active sheet's ThinBurn bake (motion, char, times, fire) to a USD file"""
 
     bl_idname = "thinburn.export_usd"
@@ -108,30 +109,11 @@ class THINBURN_OT_export_usd(bpy.types.Operator):
         obj = context.active_object
         return obj is not None and obj.type == "MESH" and bool(obj.thinburn.baked_file)
 
-    def execute(self, context):
-        path = bpy.path.abspath(self.filepath)
-        try:
-            export_object(context.active_object, path, context.scene)
-        except (BakeError, ValueError, ImportError, OSError) as exc:
-            self.report({"ERROR"}, f"ThinBurn: {exc}")
-            return {"CANCELLED"}
-        self.report({"INFO"}, f"ThinBurn: wrote {path}")
-        return {"FINISHED"}
+    menu_label = "ThinBurn Bake (.usda, .usdc)"
+    errors = (BakeError, ValueError, ImportError, OSError)
 
-    def invoke(self, context, event):
-        context.window_manager.fileselect_add(self)
-        return {"RUNNING_MODAL"}
+    def write(self, context, path):
+        export_object(context.active_object, path, context.scene)
 
 
-def _menu(self, context):
-    self.layout.operator(THINBURN_OT_export_usd.bl_idname, text="ThinBurn Bake (.usda, .usdc)")
-
-
-def register():
-    bpy.utils.register_class(THINBURN_OT_export_usd)
-    bpy.types.TOPBAR_MT_file_export.append(_menu)  # File > Export
-
-
-def unregister():
-    bpy.types.TOPBAR_MT_file_export.remove(_menu)
-    bpy.utils.unregister_class(THINBURN_OT_export_usd)
+register, unregister = registrar(THINBURN_OT_export_usd)
