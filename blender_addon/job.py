@@ -39,6 +39,9 @@ class BakeJob:
         settings = obj.thinburn
         if obj.type != "MESH":
             raise BakeError(f"'{obj.name}' is not a mesh")
+        if not settings.enabled:  # the panel's header checkbox gates the bake (issue #14)
+            raise BakeError(f"ThinBurn is off for '{obj.name}': tick the checkbox in the header of "
+                            "Properties > Physics > ThinBurn to burn it")
         if settings.frame_end <= settings.frame_start:
             raise BakeError(f"the frame range {settings.frame_start}–{settings.frame_end} is empty: "
                             "End must be after Start")

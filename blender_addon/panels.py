@@ -18,8 +18,12 @@ class ThinBurnPhysicsPanel:
 
     @classmethod
     def poll(cls, context):
+        # Every mesh shows the ThinBurn panel (its header ticks ThinBurn on); its sub-panels
+        # appear once it is on (issue #14: panels only where they apply).
         obj = context.object
-        return obj is not None and obj.type == "MESH"
+        if obj is None or obj.type != "MESH":
+            return False
+        return not getattr(cls, "bl_parent_id", "") or obj.thinburn.enabled
 
 
 class PHYSICS_PT_thinburn(ThinBurnPhysicsPanel, bpy.types.Panel):
@@ -166,8 +170,7 @@ class OBJECT_PT_thinburn_igniter(bpy.types.Panel):
         obj = context.object
         if obj is None:
             return False
-        if obj.type == "EMPTY":
-            return True
+        # Only an igniter of some sheet: an object in a sheet's Igniters collection.
         for sheet in context.scene.objects:
             coll = sheet.thinburn.igniter_collection if sheet.type == "MESH" else None
             if coll is not None and obj.name in coll.all_objects:

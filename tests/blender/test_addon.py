@@ -175,10 +175,19 @@ class _Context:
         self.scene = bpy.context.scene
 
 
+def _igniter_collection(sheet):
+    coll = bpy.data.collections.new("Igniters")
+    bpy.context.scene.collection.children.link(coll)
+    sheet.thinburn.igniter_collection = coll
+    empty = bpy.data.objects.new("Igniter", None)
+    coll.objects.link(empty)
+    return empty
+
+
 def test_panels_draw_existing_properties_and_operators(addon):
     sheet = make_sheet()
-    empty = bpy.data.objects.new("Igniter", None)
-    bpy.context.scene.collection.objects.link(empty)
+    sheet.thinburn.enabled = True
+    empty = _igniter_collection(sheet)
     drawn = []
     for obj in (sheet, empty):
         ctx = _Context(obj)
@@ -246,3 +255,18 @@ def test_a_fire_group_and_material_from_an_older_add_on_are_replaced(addon, tmp_
     assert md.node_group.name == "ThinBurn Fire"
     assert old_mat.name == "ThinBurn Fire (old)"
     assert addon.fire.fire_material() is not old_mat
+
+
+def test_panels_appear_only_where_they_apply(addon):
+    # Issue #14: ThinBurn panels showed on every mesh and every Empty.
+    sheet = make_sheet()
+    igniter = _igniter_collection(sheet)
+    stray = bpy.data.objects.new("Stray", None)
+    bpy.context.scene.collection.objects.link(stray)
+    shown = lambda obj: {c.__name__ for c in addon.panels.CLASSES if c.poll(_Context(obj))}
+    assert shown(sheet) == {"PHYSICS_PT_thinburn"}  # off: only the panel whose header enables it
+    sheet.thinburn.enabled = True
+    assert {"PHYSICS_PT_thinburn", "PHYSICS_PT_thinburn_cache"} <= shown(sheet)
+    assert "OBJECT_PT_thinburn_igniter" not in shown(sheet)
+    assert shown(igniter) == {"OBJECT_PT_thinburn_igniter"}
+    assert shown(stray) == set()

@@ -193,6 +193,7 @@ def test_wind_is_read_per_frame(addon, tmp_path):
     ("unsaved_relative", "not saved yet"),
     ("bad_range", "frame range"),
     ("pin_group_missing", "pin group"),
+    ("disabled", "ThinBurn is off for 'Sheet': tick the checkbox"),  # issue #14: Enable gates the bake
 ])
 def test_bad_settings_give_a_clear_report(addon, tmp_path, case, message):
     sheet = make_sheet()
@@ -213,6 +214,8 @@ def test_bad_settings_give_a_clear_report(addon, tmp_path, case, message):
         sheet.thinburn.cache_dir = "//cache/"
     elif case == "bad_range":
         sheet.thinburn.frame_end = 1
+    elif case == "disabled":
+        sheet.thinburn.enabled = False
     elif case == "pin_group_missing":
         if not addon.job.core_supports("pinned"):
             message = "cannot pin"
