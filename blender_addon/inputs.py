@@ -5,6 +5,7 @@ import os
 from dataclasses import dataclass
 
 import bpy
+import mathutils
 import numpy as np
 
 from .properties import DYNAMIC_PARAMS
@@ -56,14 +57,26 @@ def pin_mask(obj, group_name: str) -> np.ndarray:
     return mask
 
 
+# The floor of a Floor object sits this far above its top face, and a sheet lying on that face
+# is lifted by as much: a sheet that coincides with the table top flickers in renders (z-fight).
+FLOOR_CLEARANCE = 0.0005  # m
+
+
+def object_top(obj) -> float:
+    """The highest world z of an object's bounding box now (a table's top face)."""
+    m = obj.matrix_world
+    return max(float((m @ mathutils.Vector(corner)).z) for corner in obj.bound_box)
+
+
 def floor_height(scene, settings):
     """World height of the floor, or None."""
     if settings.floor_mode == "HEIGHT":
         return float(settings.floor_height)
     if settings.floor_mode == "OBJECT":
         if settings.floor_object is None:
-            raise BakeError("floor is set to Object but no floor object is chosen")
-        return float(settings.floor_object.matrix_world.translation.z)
+            raise BakeError("Floor is set to Object but no Floor Object is chosen: pick the table "
+                            "(or whatever the sheet lies on), or set Floor to Height")
+        return object_top(settings.floor_object) + FLOOR_CLEARANCE
     return None
 
 

@@ -30,6 +30,23 @@ def core_has_particles() -> bool:
     return hasattr(thinburn.Simulation, "particles")
 
 
+def _check_floor(obj, world, floor, settings):
+    """The sheet must start on or above the floor: said in the panel's words, not the core's.
+    A sheet lying on a Floor object's top face is lifted clear of it (inputs.FLOOR_CLEARANCE)."""
+    if floor is None or len(world) == 0:
+        return
+    low = float(np.min(world[:, 2]))
+    on_object = settings.floor_mode == "OBJECT" and settings.floor_object is not None
+    if on_object and floor - inputs.FLOOR_CLEARANCE - 1e-6 <= low < floor:
+        world[:, 2] += floor - low
+        return
+    if low < floor - 1e-6:
+        where = f"the top of '{settings.floor_object.name}'" if on_object else "Floor Height"
+        raise BakeError(f"'{obj.name}' starts below its floor: its lowest point is at "
+                        f"{low * 1000:.1f} mm, the floor ({where}) at {floor * 1000:.1f} mm. Move the "
+                        "sheet up, or lower the floor (Floor Height, or the Floor object)")
+
+
 class BakeJob:
     """Bake ``obj`` frame by frame; the previous bake is replaced only when all frames are in."""
 
@@ -56,6 +73,7 @@ class BakeJob:
         try:
             world, tris, self.matrix = inputs.sheet_geometry(obj)
             kwargs = self._simulation_kwargs(obj, settings)
+            _check_floor(obj, world, kwargs.get("floor"), settings)
             self.modifier_path, self.abs_path = inputs.cache_path(obj, settings)
             self.writer = cache.PC2Writer(self.abs_path, len(world), start_frame=float(self.frames[0]))
         except OSError as exc:

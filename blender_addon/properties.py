@@ -168,7 +168,8 @@ class ThinBurnSettings(bpy.types.PropertyGroup):
         description="World height (Z) of the floor")
     floor_object: PointerProperty(
         name="Floor Object", type=bpy.types.Object, options=STATIC,
-        description="The floor lies at this object's world Z at the first frame")
+        description="The floor lies on this object's top (its bounding box's highest world Z at "
+                    "the first frame), half a millimetre up so the sheet does not flicker on it")
 
     frame_start: IntProperty(
         name="Start", default=1, min=0, options=STATIC,

@@ -332,3 +332,43 @@ def test_bake_writes_fire_particles_when_the_core_has_them(addon, tmp_path, monk
     np.testing.assert_array_equal(data[:, 2:, 1], [[0, 0], [1, 0], [1, 1], [0, 0], [1, 0], [1, 1]])
     fire = bpy.data.objects["ThinBurn Fire Sheet"]
     assert fire.modifiers["ThinBurn Cache"].filepath.endswith("Sheet_fire.pc2")
+
+
+def _table(top=0.75):
+    """A 1 m cube scaled to a table whose top face is at z = top (its origin at its centre)."""
+    bpy.ops.mesh.primitive_cube_add(size=1.0, location=(0.0, 0.0, top - 0.05))
+    table = bpy.context.active_object
+    table.scale = (1.0, 1.0, 0.1)
+    bpy.context.view_layer.update()
+    return table
+
+
+def test_floor_object_is_the_top_of_the_table_and_the_sheet_clears_it(addon, tmp_path):
+    # Issue #14: Floor = Object put the floor at the object's origin (inside a box table) or,
+    # for a plane, exactly on the sheet, which z-fights in renders.
+    table = _table(0.75)
+    sheet = make_sheet(z=0.75)  # lying on the table top, as an artist places it
+    make_igniter(sheet, (0.0, 0.0, 0.75), lit_from=1, radius=0.03)
+    s = setup_bake(sheet, frames=12, cells=16, cache_dir=tmp_path, floor=False)
+    s.floor_mode, s.floor_object = "OBJECT", table
+    bpy.context.view_layer.objects.active = sheet
+    assert bpy.ops.thinburn.bake() == {"FINISHED"}
+    _, samples = addon.cache.read_pc2(tmp_path / "Sheet.pc2")
+    z = samples[..., 2] + sheet.matrix_world.translation.z
+    clearance = addon.inputs.FLOOR_CLEARANCE
+    assert z.min() >= 0.75 + clearance - 1e-6  # never in the table's top face
+    assert z[0].max() <= 0.75 + clearance + 1e-6  # lifted by the clearance only
+
+
+def test_a_sheet_inside_its_floor_object_is_refused_in_an_artists_words(addon, tmp_path):
+    table = _table(0.75)
+    sheet = make_sheet(z=0.70)
+    make_igniter(sheet, (0.0, 0.0, 0.70), lit_from=1, radius=0.03)
+    s = setup_bake(sheet, frames=5, cells=16, cache_dir=tmp_path, floor=False)
+    s.floor_mode, s.floor_object = "OBJECT", table
+    bpy.context.view_layer.objects.active = sheet
+    with pytest.raises(RuntimeError) as info:
+        bpy.ops.thinburn.bake()
+    text = str(info.value)
+    assert "'Sheet' starts below its floor" in text and "the top of 'Cube'" in text
+    assert "Move the sheet up" in text and "Traceback" not in text
