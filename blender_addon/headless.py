@@ -17,35 +17,12 @@ from __future__ import annotations
 import argparse
 import os
 import sys
-import time
 
 import bpy
 
 from . import operators
 from .inputs import BakeError
-from .job import BakeJob
-
-
-class _Progress:
-    """One line per ``interval`` seconds: frame, percentage, elapsed time and ETA."""
-
-    def __init__(self, name: str, stream, interval: float):
-        self.name, self.stream, self.interval = name, stream, interval
-        self.t0 = time.perf_counter()
-        self.last = -1e9
-
-    def __call__(self, job, force: bool = False) -> None:
-        now = time.perf_counter()
-        if not force and now - self.last < self.interval:
-            return
-        self.last = now
-        frac = job.progress
-        elapsed = now - self.t0
-        eta = f"{elapsed / frac - elapsed:.1f} s" if frac > 0 else "?"
-        self.stream.write(f"ThinBurn: '{self.name}' frame {job.current_frame} "
-                          f"({job.frames_done}/{len(job.frames)}, {100 * frac:5.1f} %) "
-                          f"elapsed {elapsed:.1f} s, ETA {eta}\n")
-        self.stream.flush()
+from .job import BakeJob, ProgressLines
 
 
 def enabled_sheets(scene) -> list:
@@ -63,7 +40,7 @@ def bake_object(obj, stream=sys.stderr, interval: float = 1.0) -> str:
     if operators.running_job(scene) is not None:
         raise BakeError("another ThinBurn bake is running in this scene")
     job = BakeJob(context, obj)
-    progress = _Progress(obj.name, stream, interval)
+    progress = ProgressLines(obj.name, stream, interval)
     operators._running[scene.name] = job
     try:
         job.run(progress=progress)

@@ -30,6 +30,29 @@ def core_has_particles() -> bool:
     return hasattr(thinburn.Simulation, "particles")
 
 
+class ProgressLines:
+    """A bake's progress as text: one line per ``interval`` seconds (frame, percentage,
+    elapsed time, ETA), for headless and background bakes."""
+
+    def __init__(self, name: str, stream, interval: float):
+        self.name, self.stream, self.interval = name, stream, interval
+        self.t0 = _time.perf_counter()
+        self.last = -1e9
+
+    def __call__(self, job, force: bool = False) -> None:
+        now = _time.perf_counter()
+        if not force and now - self.last < self.interval:
+            return
+        self.last = now
+        frac = job.progress
+        elapsed = now - self.t0
+        eta = f"{elapsed / frac - elapsed:.1f} s" if frac > 0 else "?"
+        self.stream.write(f"ThinBurn: '{self.name}' frame {job.current_frame} "
+                          f"({job.frames_done}/{len(job.frames)}, {100 * frac:5.1f} %) "
+                          f"elapsed {elapsed:.1f} s, ETA {eta}\n")
+        self.stream.flush()
+
+
 def _check_floor(obj, world, floor, settings):
     """The sheet must start on or above the floor: said in the panel's words, not the core's.
     A sheet lying on a Floor object's top face is lifted clear of it (inputs.FLOOR_CLEARANCE)."""

@@ -6,12 +6,14 @@ shows the frame and a progress bar, Esc cancels and leaves the previous bake unt
 """
 from __future__ import annotations
 
+import sys
+
 import bpy
 
 from . import materials
 from .inputs import BakeError
 from .properties import load_preset
-from .job import BakeJob
+from .job import BakeJob, ProgressLines
 
 _running = {}  # scene name -> the BakeJob in progress (the panel shows it)
 
@@ -63,8 +65,10 @@ class THINBURN_OT_bake(bpy.types.Operator):
         if job is None:
             return {"CANCELLED"}
         _running[context.scene.name] = job
+        # From a script in background mode (blender -b) nothing else shows the bake going on.
+        progress = ProgressLines(job.obj_name, sys.stderr, 1.0) if bpy.app.background else None
         try:
-            job.run()
+            job.run(progress=progress)
         except BakeError as exc:
             self.report({"ERROR"}, f"ThinBurn: {exc}")
             return {"CANCELLED"}

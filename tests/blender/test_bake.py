@@ -372,3 +372,14 @@ def test_a_sheet_inside_its_floor_object_is_refused_in_an_artists_words(addon, t
     text = str(info.value)
     assert "'Sheet' starts below its floor" in text and "the top of 'Cube'" in text
     assert "Move the sheet up" in text and "Traceback" not in text
+
+
+def test_a_background_bake_prints_its_progress(addon, tmp_path, capfd):
+    # Issue #14: a background bake printed nothing until the end.
+    assert bpy.app.background
+    sheet = make_sheet()
+    make_igniter(sheet, (0.0, 0.0, 0.5), lit_from=1, radius=0.03)
+    setup_bake(sheet, frames=6, cells=16, cache_dir=tmp_path)
+    assert bpy.ops.thinburn.bake() == {"FINISHED"}
+    lines = [l for l in capfd.readouterr().err.splitlines() if l.startswith("ThinBurn: 'Sheet' frame")]
+    assert lines and "ETA" in lines[0] and "%" in lines[0]
