@@ -17,8 +17,6 @@ namespace py = pybind11;
 namespace thinburn::bind {
 namespace {
 
-void apply_bending_kwargs(BendingParams& b, const py::dict& kw);
-
 FrontMethod front_from_name(const std::string& name) {
   if (name == "cellular") return FrontMethod::Cellular8;
   if (name == "cellular16") return FrontMethod::Cellular16;
@@ -79,32 +77,7 @@ void define_params(py::module_& m) {
       .def("set_bending", [](SimulationParams& s, const py::dict& kw) { apply_bending_kwargs(s.bending, kw); })
       .def_property_readonly("dynamics", [](const SimulationParams& s) { return dynamics_params_dict(s.dynamics); })
       .def_property_readonly("particles", [](const SimulationParams& s) { return particle_params_dict(s.particles); })
-      .def_property_readonly("bending", [](const SimulationParams& s) {
-        const BendingParams& b = s.bending;
-        return py::dict(py::arg("ct") = b.ct, py::arg("cp") = b.cp, py::arg("alpha") = b.alpha,
-                        py::arg("beta") = b.beta, py::arg("d_min") = b.d_min, py::arg("max_rotation") = b.max_rotation,
-                        py::arg("heat_tolerance") = b.tolerance, py::arg("heat_fast") = b.fast);
-      });
-}
-
-void apply_bending_kwargs(BendingParams& b, const py::dict& kw) {
-  for (const auto& item : kw) {
-    const std::string k = key_name(item.first);
-    double* d = k == "ct" ? &b.ct : k == "cp" ? &b.cp : k == "alpha" ? &b.alpha : k == "beta" ? &b.beta
-              : k == "d_min" ? &b.d_min : k == "heat_tolerance" ? &b.tolerance
-              : k == "max_rotation" ? &b.max_rotation : nullptr;
-    if (d)
-      *d = to_double(k, item.second);
-    else if (k == "heat_fast")
-      b.fast = to_bool(k, item.second);
-    else
-      throw py::type_error("unexpected bending parameter '" + k + "'");
-  }
-  if (!(b.d_min > 0)) throw std::invalid_argument("d_min must be > 0");
-  if (!(b.tolerance > 0 && b.tolerance < 1)) throw std::invalid_argument("heat_tolerance must be in (0, 1)");
-  if (!(b.ct >= 0) || !(b.cp >= 0)) throw std::invalid_argument("ct and cp must be >= 0");
-  if (!(b.max_rotation >= 0) || !std::isfinite(b.max_rotation)) throw std::invalid_argument("max_rotation must be >= 0");
-  if (!std::isfinite(b.alpha) || !std::isfinite(b.beta)) throw std::invalid_argument("alpha and beta must be finite");
+      .def_property_readonly("bending", [](const SimulationParams& s) { return bending_params_dict(s.bending); });
 }
 
 }  // namespace
