@@ -37,6 +37,24 @@ EMBER_KELVIN = 1300.0
 CHAR_POINT = 0.4  # share of a cell's burn after which it looks fully charred
 
 
+# The burn's inputs, shared by the char group and the wrap group: (socket type, default, min,
+# max, description).
+BURN_INPUTS = {
+    "Frame": ("NodeSocketFloat", 1.0, None, None, "The scene frame (a driver: frame)"),
+    "Char Color": ("NodeSocketColor", CHAR, None, None, "Colour of fully charred material"),
+    "Ember Strength": ("NodeSocketFloat", 6.0, 0.0, 1000.0, "Emission strength of the glowing edge"),
+    "Ember Width": ("NodeSocketFloat", 0.3, 0.0, 1.0, "Share of the burn, before burn-through, that glows"),
+    "Char Point": ("NodeSocketFloat", CHAR_POINT, 0.01, 1.0,
+                   "Share of the burn after which the material is fully charred"),
+    "Burn Through": ("NodeSocketFloat", 1.0, 0.0, 1.0, "1: burnt-out areas become holes; 0: they stay as char (ash)"),
+}
+
+
+def burn_input(tree, name):
+    kind, default, lo, hi, desc = BURN_INPUTS[name]
+    interface_socket(tree, name, "INPUT", kind, default, lo, hi, desc=desc)
+
+
 # --- the shader group ----------------------------------------------------------------------------
 def char_group():
     """Shader node group "ThinBurn Char" (created once, then reused)."""
@@ -47,18 +65,12 @@ def char_group():
     interface_socket(tree, "Char", "OUTPUT", "NodeSocketFloat", desc="0 unburnt .. 1 fully charred")
     interface_socket(tree, "Ember", "OUTPUT", "NodeSocketFloat", desc="Glow weight of the ember edge")
     interface_socket(tree, "Alpha", "OUTPUT", "NodeSocketFloat", desc="0 where burnt through")
-    interface_socket(tree, "Frame", "INPUT", "NodeSocketFloat", 1.0, desc="The scene frame (a driver: frame)")
+    burn_input(tree, "Frame")
     interface_socket(tree, "Paper Color", "INPUT", "NodeSocketColor", PAPER, desc="Colour of the unburnt sheet")
-    interface_socket(tree, "Char Color", "INPUT", "NodeSocketColor", CHAR, desc="Colour of fully charred material")
-    interface_socket(tree, "Ember Strength", "INPUT", "NodeSocketFloat", 6.0, 0.0, 1000.0,
-        desc="Emission strength of the glowing edge")
-    interface_socket(tree, "Ember Width", "INPUT", "NodeSocketFloat", 0.3, 0.0, 1.0,
-        desc="Share of the burn, before burn-through, that glows")
-    interface_socket(tree, "Char Point", "INPUT", "NodeSocketFloat", CHAR_POINT, 0.01, 1.0,
-        desc="Share of the burn after which the material is fully charred")
+    for name in ("Char Color", "Ember Strength", "Ember Width", "Char Point"):
+        burn_input(tree, name)
     interface_socket(tree, "Roughness", "INPUT", "NodeSocketFloat", 0.9, 0.0, 1.0)
-    interface_socket(tree, "Burn Through", "INPUT", "NodeSocketFloat", 1.0, 0.0, 1.0,
-        desc="1: burnt-out areas become holes; 0: they stay as char (ash)")
+    burn_input(tree, "Burn Through")
 
     gi = node(tree, "NodeGroupInput", -900, 0)
     go = node(tree, "NodeGroupOutput", 700, 0)
@@ -128,16 +140,8 @@ def wrap_group():
     if not fresh:
         return tree
     interface_socket(tree, "Shader", "INPUT", "NodeSocketShader", desc="The material's own shader")
-    interface_socket(tree, "Frame", "INPUT", "NodeSocketFloat", 1.0, desc="The scene frame (a driver: frame)")
-    interface_socket(tree, "Char Color", "INPUT", "NodeSocketColor", CHAR, desc="Colour of fully charred material")
-    interface_socket(tree, "Ember Strength", "INPUT", "NodeSocketFloat", 6.0, 0.0, 1000.0,
-        desc="Emission strength of the glowing edge")
-    interface_socket(tree, "Ember Width", "INPUT", "NodeSocketFloat", 0.3, 0.0, 1.0,
-        desc="Share of the burn, before burn-through, that glows")
-    interface_socket(tree, "Char Point", "INPUT", "NodeSocketFloat", CHAR_POINT, 0.01, 1.0,
-        desc="Share of the burn after which the material is fully charred")
-    interface_socket(tree, "Burn Through", "INPUT", "NodeSocketFloat", 1.0, 0.0, 1.0,
-        desc="1: burnt-out areas become holes; 0: they stay as char (ash)")
+    for name in ("Frame", "Char Color", "Ember Strength", "Ember Width", "Char Point", "Burn Through"):
+        burn_input(tree, name)
     interface_socket(tree, "Shader", "OUTPUT", "NodeSocketShader")
     L = tree.links.new
     gi = node(tree, "NodeGroupInput", -1000, 0)

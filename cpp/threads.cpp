@@ -14,7 +14,6 @@
 #include <string>
 #include <thread>
 #include <unordered_map>
-#include <vector>
 
 namespace thinburn {
 namespace {
@@ -90,7 +89,7 @@ class Pool {
       job_ = job;
       generation_.fetch_add(1, std::memory_order_release);
       if (sleeping_ > 0) {
-        if (helpers >= static_cast<int>(workers_.size()))
+        if (helpers >= workers_)
           wake_.notify_all();
         else
           for (int h = 0; h < helpers; ++h) wake_.notify_one();
@@ -143,12 +142,12 @@ class Pool {
   }
 
   void grow(int helpers) {
-    while (static_cast<int>(workers_.size()) < helpers) {
+    while (workers_ < helpers) {
       // Helpers beyond the cores never watch: they would spin on the cores the caller needs.
-      const bool may_watch = static_cast<int>(workers_.size()) + 1 < hardware_threads();
+      const bool may_watch = workers_ + 1 < hardware_threads();
       std::thread t([this, may_watch] { helper_main(may_watch); });
       t.detach();  // helpers live as long as the process; nothing joins them at exit
-      workers_.push_back(t.get_id());
+      ++workers_;
     }
   }
 
@@ -188,7 +187,7 @@ class Pool {
   std::mutex mutex_;
   std::condition_variable wake_;
   std::shared_ptr<Job> job_;
-  std::vector<std::thread::id> workers_;
+  int workers_ = 0;  // helpers started (they never end)
   int sleeping_ = 0;
   std::unordered_map<void (*)(void*, long), Site> sites_;  // touched only by busy_'s holder
 };

@@ -11,6 +11,8 @@ seconds of each run, counts alternating (1, all, 1, all).
 from __future__ import annotations
 
 import argparse
+import contextlib
+import os
 import time
 
 import thinburn
@@ -32,8 +34,6 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quiet", action="store_true", help="do not load the cores")
     args = ap.parse_args()
-    import contextlib
-    import os
     load = contextlib.nullcontext() if args.quiet else loaded_cores(os.cpu_count() or 1)
     with load:
         time.sleep(0.5)

@@ -16,23 +16,7 @@ import shutil
 import tempfile
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parent.parent
-ADDON_NAME = "thinburn_addon"
-
-
-def enable_addon(user_dir: Path):
-    """Load bpy with throwaway user folders and enable the add-on from this checkout."""
-    os.environ["BLENDER_USER_RESOURCES"] = str(user_dir)
-    addons = user_dir / "scripts" / "addons"
-    addons.mkdir(parents=True)
-    (addons / ADDON_NAME).symlink_to(ROOT / "blender_addon", target_is_directory=True)
-    import bpy  # noqa: F401  (first: it puts Blender's modules on the path)
-    import addon_utils
-
-    def fail(exc):
-        raise exc
-
-    addon_utils.enable(ADDON_NAME, default_set=True, handle_error=fail)
+from bench_blender import ROOT, enable_addon  # scripts/ is on the path when a script runs
 
 
 def build_scene(cache: Path, size: float, n: int, frames: int, own_material: bool,

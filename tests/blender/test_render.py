@@ -17,17 +17,8 @@ BURN_S = 2.0  # burn duration: long enough that the render frame shows char, not
 
 
 def _render(path, frame):
-    scene = bpy.context.scene
-    scene.frame_set(frame)
-    scene.render.filepath = str(path)
-    bpy.ops.render.render(write_still=True)
-    img = bpy.data.images.load(str(path))
-    w, h = img.size
-    px = np.empty(w * h * 4, dtype=np.float32)
-    img.pixels.foreach_get(px)
-    bpy.data.images.remove(img)
-    rgb = px.reshape(h, w, 4)[::-1, :, :3]  # Blender stores rows bottom-up
-    return rgb @ np.array([0.2126, 0.7152, 0.0722], dtype=np.float32)
+    """Luminance of a rendered frame (rows top-down)."""
+    return _render_rgb(path, frame) @ np.array([0.2126, 0.7152, 0.0722], dtype=np.float32)
 
 
 def _camera_and_light(size):
@@ -97,7 +88,7 @@ def _render_rgb(path, frame):
     px = np.empty(w * h * 4, dtype=np.float32)
     img.pixels.foreach_get(px)
     bpy.data.images.remove(img)
-    return px.reshape(h, w, 4)[::-1, :, :3]
+    return px.reshape(h, w, 4)[::-1, :, :3]  # Blender stores rows bottom-up
 
 
 def _fire_scene(tmp_path, size=0.2, frames=30):
