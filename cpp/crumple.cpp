@@ -31,13 +31,10 @@ struct Grid {
   }
 };
 
-// Displacement of point p when couple (oi, oj) turns the couple whose centre is ca by angle
-// delta about its line along columns (along_j) or rows.
-Eigen::Vector3d turn(const Grid& g, int oi, int oj, bool along_j, double delta,
-                     const Eigen::Vector3d& ca, const Eigen::Vector3d& p) {
-  const Eigen::Vector3d co = g.centre(oi, oj);
-  const Eigen::Vector3d n = g.normal(oi, oj);
-  Eigen::Vector3d a = g.tangent(oi, oj, along_j);
+// Displacement of point p of the couple whose centre is ca when couple O (centre co, normal n)
+// turns it by delta about the line through co along a (in O's tangent plane after projection).
+Eigen::Vector3d turn_about(const Eigen::Vector3d& co, const Eigen::Vector3d& n, Eigen::Vector3d a,
+                           double delta, const Eigen::Vector3d& ca, const Eigen::Vector3d& p) {
   a -= a.dot(n) * n;
   if (a.norm() <= 1e-300) return Eigen::Vector3d::Zero();
   a.normalize();
@@ -48,6 +45,23 @@ Eigen::Vector3d turn(const Grid& g, int oi, int oj, bool along_j, double delta,
   const Eigen::Vector3d q = p - co;
   const Eigen::Vector3d q_perp = q - q.dot(a) * a;
   return (std::cos(theta) - 1.0) * q_perp + std::sin(theta) * a.cross(q_perp);
+}
+
+// Grid: couple (oi, oj) turns its neighbours about its line along columns (along_j) or rows.
+Eigen::Vector3d turn(const Grid& g, int oi, int oj, bool along_j, double delta,
+                     const Eigen::Vector3d& ca, const Eigen::Vector3d& p) {
+  return turn_about(g.centre(oi, oj), g.normal(oi, oj), g.tangent(oi, oj, along_j), delta, ca, p);
+}
+
+Eigen::Vector3d couple_centre(const RowMatX3& pos, int c) {
+  return 0.5 * (pos.row(2 * c) + pos.row(2 * c + 1)).transpose();
+}
+
+// Bottom -> top of couple c (+z if it collapsed: a control-surface couple never has zero
+// thickness at rest, and the thickness spring is the stiffest).
+Eigen::Vector3d couple_axis(const RowMatX3& pos, int c) {
+  const Eigen::Vector3d n = (pos.row(2 * c + 1) - pos.row(2 * c)).transpose();
+  return n.norm() > 1e-300 ? Eigen::Vector3d(n.normalized()) : Eigen::Vector3d::UnitZ();
 }
 
 }  // namespace
@@ -71,6 +85,31 @@ void crumple_displacements(int M, const RowMatX3& pos, const Eigen::VectorXd& de
         if (oi < 0 || oi >= M || oj < 0 || oj >= M) continue;
         const double dl = delta(oi * M + oj);
         if (dl != 0.0) d += turn(g, oi, oj, /*along_j=*/di[q] != 0, dl, ca, p);
+      }
+    }
+    out.row(v) = d.transpose();
+  });
+}
+
+void crumple_displacements(const std::vector<int>& nbr_offset, const std::vector<int>& nbr_index,
+                           const RowMatX3& pos, const Eigen::VectorXd& delta,
+                           const std::vector<std::uint8_t>& pinned, RowMatX3& out) {
+  const int n = static_cast<int>(pos.rows());
+  out.resize(n, 3);
+  parallel_for(0, n, 64, [&](long v_) {
+    const int v = static_cast<int>(v_);
+    Eigen::Vector3d d = Eigen::Vector3d::Zero();
+    const int c = v / 2;
+    if (!pinned[v]) {
+      const Eigen::Vector3d ca = couple_centre(pos, c);
+      const Eigen::Vector3d p = pos.row(v).transpose();
+      // Every neighbour O of this couple that turns moves it about O's axis perpendicular to O -> c.
+      for (int q = nbr_offset[c]; q < nbr_offset[c + 1]; ++q) {
+        const int o = nbr_index[q];
+        const double dl = delta(o);
+        if (dl == 0.0) continue;
+        const Eigen::Vector3d co = couple_centre(pos, o), no = couple_axis(pos, o);
+        d += turn_about(co, no, no.cross(ca - co), dl, ca, p);
       }
     }
     out.row(v) = d.transpose();

@@ -27,4 +27,12 @@ using RowMatX3 = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
 void crumple_displacements(int M, const RowMatX3& pos, const Eigen::VectorXd& delta,
                            const std::vector<std::uint8_t>& pinned, RowMatX3& out);
 
+/// @brief The same crumple on a lattice whose couples follow a shell's control surface: couple
+/// O's neighbour B (nbr_index[nbr_offset[O] ..]) turns about the line through O's centre in O's
+/// tangent plane perpendicular to O -> B, by delta(O), toward O's top side. On a grid this is the
+/// grid version's axis up to the tangents' difference.
+void crumple_displacements(const std::vector<int>& nbr_offset, const std::vector<int>& nbr_index,
+                           const RowMatX3& pos, const Eigen::VectorXd& delta,
+                           const std::vector<std::uint8_t>& pinned, RowMatX3& out);
+
 }  // namespace thinburn

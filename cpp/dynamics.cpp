@@ -147,9 +147,13 @@ struct LatticeDynamics::Factor {
 
 LatticeDynamics::~LatticeDynamics() = default;
 
-LatticeDynamics::LatticeDynamics(FfdLattice& lattice, const DynamicsParams& p)
-    : lat_(lattice), p_(p), M_(lattice.M()), n_(lattice.size()) {
+LatticeDynamics::LatticeDynamics(FfdLattice& lattice, const DynamicsParams& p, LatticeTopology topology)
+    : lat_(lattice), p_(p), topo_(topology.couples > 0 ? std::move(topology) : grid_topology(lattice.M())),
+      C_(lattice.couples()), n_(lattice.size()) {
   validate(p);
+  if (topo_.couples != C_ || static_cast<int>(topo_.nbr_offset.size()) != C_ + 1)
+    throw std::invalid_argument("topology: " + std::to_string(topo_.couples) + " couples, the lattice has " +
+                                std::to_string(C_));
   build_springs();
   vel_ = RowMatX3::Zero(n_, 3);
   accel_ = RowMatX3::Zero(n_, 3);
@@ -161,7 +165,7 @@ LatticeDynamics::LatticeDynamics(FfdLattice& lattice, const DynamicsParams& p)
   strength_ = Eigen::VectorXd::Ones(n_);
   spring_scale_.assign(sa_.size(), 1.0);
   area_ = heat_ = heat_prev_ = Eigen::VectorXd::Zero(n_);
-  D_prev_ = delta_ = Eigen::VectorXd::Zero(M_ * M_);
+  D_prev_ = delta_ = Eigen::VectorXd::Zero(C_);
   pinned_.assign(n_, 0);
   awake_.assign(n_, 1);
   forced_.assign(n_, 0);
@@ -182,7 +186,7 @@ void LatticeDynamics::build_bimetal() {
   // couples whose centres are mid_sep_ apart, at offsets +-(half the couple's thickness) from the
   // mid-surface (+ toward the top).
   const RowMatX3& r = lat_.rest();
-  const int C = M_ * M_;
+  const int C = topo_.couples;
   auto centre = [&](int c) { return Eigen::Vector3d(0.5 * (r.row(2 * c) + r.row(2 * c + 1)).transpose()); };
   auto offset = [&](int v) {
     const double half = 0.5 * (r.row(v | 1) - r.row(v & ~1)).norm();
@@ -199,19 +203,13 @@ void LatticeDynamics::build_bimetal() {
     off_b_[s] = offset(sb_[s]);
   }
   couple_spacing_ = Eigen::VectorXd::Zero(C);
-  for (int i = 0; i < M_; ++i)
-    for (int j = 0; j < M_; ++j) {
-      double sum = 0.0;
-      int k = 0;
-      const int di[4] = {-1, 1, 0, 0}, dj[4] = {0, 0, -1, 1};
-      for (int q = 0; q < 4; ++q) {
-        const int oi = i + di[q], oj = j + dj[q];
-        if (oi < 0 || oi >= M_ || oj < 0 || oj >= M_) continue;
-        sum += (centre(oi * M_ + oj) - centre(i * M_ + j)).norm();
-        ++k;
-      }
-      couple_spacing_(i * M_ + j) = k > 0 ? sum / k : 1.0;
-    }
+  for (int c = 0; c < C; ++c) {
+    double sum = 0.0;
+    int k = 0;
+    for (int q = topo_.nbr_offset[c]; q < topo_.nbr_offset[c + 1]; ++q, ++k)
+      sum += (centre(topo_.nbr_index[q]) - centre(c)).norm();
+    couple_spacing_(c) = k > 0 ? sum / k : 1.0;
+  }
 }
 
 double LatticeDynamics::bimetal_ratio(int s, double kappa) const {
@@ -248,40 +246,18 @@ void LatticeDynamics::apply_bimetal(const Eigen::VectorXd& D, bool all) {
 }
 
 void LatticeDynamics::build_springs() {
-  auto add = [&](int a, int b, std::uint8_t kind) {
-    sa_.push_back(a);
-    sb_.push_back(b);
-    kind_.push_back(kind);
-    rest_len_.push_back((lat_.rest().row(b) - lat_.rest().row(a)).norm());
-  };
-  const int M = M_;
-  for (int k = 0; k < 2; ++k)
-    for (int i = 0; i < M; ++i)
-      for (int j = 0; j < M; ++j) {
-        const int v = lat_.index(i, j, k);
-        if (j + 1 < M) add(v, lat_.index(i, j + 1, k), 0);
-        if (i + 1 < M) add(v, lat_.index(i + 1, j, k), 0);
-        if (i + 1 < M && j + 1 < M) {
-          add(v, lat_.index(i + 1, j + 1, k), 1);
-          add(lat_.index(i, j + 1, k), lat_.index(i + 1, j, k), 1);
-        }
-        if (j + 2 < M) add(v, lat_.index(i, j + 2, k), 2);
-        if (i + 2 < M) add(v, lat_.index(i + 2, j, k), 2);
-      }
-  vert_spring_.assign(M * M, 0);
-  for (int i = 0; i < M; ++i)
-    for (int j = 0; j < M; ++j) {
-      vert_spring_[i * M + j] = static_cast<int>(sa_.size());
-      add(lat_.index(i, j, 0), lat_.index(i, j, 1), 3);
-      if (j + 1 < M) {
-        add(lat_.index(i, j, 0), lat_.index(i, j + 1, 1), 4);
-        add(lat_.index(i, j, 1), lat_.index(i, j + 1, 0), 4);
-      }
-      if (i + 1 < M) {
-        add(lat_.index(i, j, 0), lat_.index(i + 1, j, 1), 4);
-        add(lat_.index(i, j, 1), lat_.index(i + 1, j, 0), 4);
-      }
-    }
+  const int ns0 = topo_.springs();
+  sa_ = topo_.spring_a;
+  sb_ = topo_.spring_b;
+  kind_ = topo_.kind;
+  rest_len_.resize(ns0);
+  vert_spring_.assign(topo_.couples, 0);
+  for (int s = 0; s < ns0; ++s) {
+    if (sa_[s] < 0 || sa_[s] >= n_ || sb_[s] < 0 || sb_[s] >= n_ || sa_[s] == sb_[s])
+      throw std::invalid_argument("topology: spring " + std::to_string(s) + " does not join two control vertices");
+    rest_len_[s] = (lat_.rest().row(sb_[s]) - lat_.rest().row(sa_[s])).norm();
+    if (kind_[s] == 3) vert_spring_[sa_[s] / 2] = s;
+  }
   const int ns = static_cast<int>(sa_.size());
   inc_start_.assign(n_ + 1, 0);
   for (int s = 0; s < ns; ++s) {
@@ -1196,7 +1172,7 @@ void LatticeDynamics::update_sleep(double dt) {
 
 StepStats LatticeDynamics::step(double dt, const Eigen::VectorXd& D, const Eigen::VectorXd& heat) {
   require(std::isfinite(dt) && dt > 0.0, "dt must be finite and > 0, got " + std::to_string(dt));
-  require(D.size() == M_ * M_, "D must have M*M = " + std::to_string(M_ * M_) + " entries, got " +
+  require(D.size() == C_, "D must have one entry per couple (" + std::to_string(C_) + "), got " +
                                    std::to_string(D.size()));
   require(heat.size() == n_, "heat must have 2*M*M = " + std::to_string(n_) + " entries, got " +
                                  std::to_string(heat.size()));
@@ -1210,7 +1186,10 @@ StepStats LatticeDynamics::step(double dt, const Eigen::VectorXd& D, const Eigen
   const bool crumple = delta_.size() > 0 && delta_.cwiseAbs().maxCoeff() > 0.0;
   const bool bimetal = p_.bimetal && (crumple || bimetal_all_);
   if (crumple && !p_.bimetal) {
-    crumple_displacements(M_, lat_.positions(), delta_, pinned_, disp_);
+    if (topo_.grid_side > 0)
+      crumple_displacements(topo_.grid_side, lat_.positions(), delta_, pinned_, disp_);
+    else
+      crumple_displacements(topo_.nbr_offset, topo_.nbr_index, lat_.positions(), delta_, pinned_, disp_);
     if (p_.crumple_momentum) remove_crumple_translation();
   } else {
     disp_.setZero();

@@ -98,8 +98,9 @@ struct StepStats {
 class LatticeDynamics {
  public:
   /// @brief Dynamics of lattice (kept by reference; it must outlive this object). Masses start
-  /// at 1 kg, areas at 0, nothing pinned, no wind.
-  LatticeDynamics(FfdLattice& lattice, const DynamicsParams& p);
+  /// at 1 kg, areas at 0, nothing pinned, no wind. topology: its springs and couple neighbours;
+  /// empty (the default) is the grid's, grid_topology(lattice.M()).
+  LatticeDynamics(FfdLattice& lattice, const DynamicsParams& p, LatticeTopology topology = {});
   ~LatticeDynamics();
   LatticeDynamics(const LatticeDynamics&) = delete;
   LatticeDynamics& operator=(const LatticeDynamics&) = delete;
@@ -125,8 +126,8 @@ class LatticeDynamics {
   /// @brief Set positions and velocities ((2 M^2) x 3 each); everything wakes.
   void set_state(const RowMatX3& x, const RowMatX3& v);
 
-  /// @brief Advance by dt. D: per couple (M^2) total rotation so far (rad, eqs 4-6); the step
-  /// turns its increase since the previous step into a crumple. heat: per control vertex (2 M^2),
+  /// @brief Advance by dt. D: per couple total rotation so far (rad, eqs 4-6); the step
+  /// turns its increase since the previous step into a crumple. heat: per control vertex,
   /// drives buoyancy. Throws std::runtime_error if an explicit integrator needs more than
   /// max_substeps substeps.
   StepStats step(double dt, const Eigen::VectorXd& D, const Eigen::VectorXd& heat);
@@ -163,6 +164,8 @@ class LatticeDynamics {
   const std::vector<double>& rest_lengths() const { return rest_len_; }
   /// @brief Spring endpoints, (springs) x 2.
   Eigen::Matrix<int, Eigen::Dynamic, 2, Eigen::RowMajor> spring_pairs() const;
+  /// @brief Springs and couple neighbours.
+  const LatticeTopology& topology() const { return topo_; }
   /// @brief Spring kind per spring: 0 structure, 1 shear, 2 flex, 3 thickness (top-bottom of a
   /// couple), 4 transverse (top-bottom diagonals between adjacent couples).
   const std::vector<std::uint8_t>& spring_kinds() const { return kind_; }
@@ -207,7 +210,8 @@ class LatticeDynamics {
 
   FfdLattice& lat_;
   DynamicsParams p_;
-  int M_, n_;
+  LatticeTopology topo_;
+  int C_, n_;  // couples, control vertices
   // Springs: endpoints, kind, rest length; per-vertex incidence (CSR, fixed order).
   std::vector<int> sa_, sb_;
   std::vector<std::uint8_t> kind_;

@@ -149,12 +149,23 @@ bool deform_points(const Embedding& e, const double* table, int couples, Eigen::
 
 }  // namespace
 
-FfdLattice::FfdLattice(int M, const RowMatX3& rest) : M_(M), rest_(rest), pos_(rest) {
+FfdLattice::FfdLattice(int M, const RowMatX3& rest) : M_(M), couples_(M * M), rest_(rest), pos_(rest) {
   if (M < 2) throw std::invalid_argument("M must be >= 2, got " + std::to_string(M));
   if (rest.rows() != 2 * Eigen::Index(M) * M)
     throw std::invalid_argument("rest must have 2*M*M = " + std::to_string(2 * M * M) +
                                 " rows, got " + std::to_string(rest.rows()));
   if (!rest.allFinite()) throw std::invalid_argument("rest must be finite");
+}
+
+FfdLattice::FfdLattice(const RowMatX3& rest, int M, int couples) : M_(M), couples_(couples), rest_(rest), pos_(rest) {}
+
+FfdLattice FfdLattice::on_surface(int couples, const RowMatX3& rest) {
+  if (couples < 3) throw std::invalid_argument("couples must be >= 3, got " + std::to_string(couples));
+  if (rest.rows() != 2 * Eigen::Index(couples))
+    throw std::invalid_argument("rest must have 2*couples = " + std::to_string(2 * couples) +
+                                " rows, got " + std::to_string(rest.rows()));
+  if (!rest.allFinite()) throw std::invalid_argument("rest must be finite");
+  return FfdLattice(rest, 0, couples);
 }
 
 Embedding FfdLattice::embed(const RowMatX3& params, const RowMatX3& rest_points,
@@ -164,6 +175,7 @@ Embedding FfdLattice::embed(const RowMatX3& params, const RowMatX3& rest_points,
                                 std::to_string(params.rows()) + "), got " +
                                 std::to_string(rest_points.rows()));
   if (!rest_points.allFinite()) throw std::invalid_argument("rest_points must be finite");
+  if (M_ == 0) throw std::invalid_argument("embed: this lattice follows a control surface, not a grid");
   const bool spline = interp == LatticeInterp::QuadraticBSpline && M_ >= 3;
   const int side = spline ? 3 : 2;
   Embedding e;
@@ -203,7 +215,7 @@ void FfdLattice::deform(const Embedding& e, Eigen::Ref<RowMatX3> out, double z_m
   // Each control vertex's displacement once per call, not once per point that uses it. The
   // buffer belongs to the calling thread: concurrent deforms (the GIL is released) never share it.
   thread_local std::vector<double> table;
-  const int couples = M_ * M_;
+  const int couples = couples_;
   table.resize(8 * std::size_t(couples));
   for (int v = 0; v < 2 * couples; ++v) {  // vertex v = 2 * couple + layer: slot 4 v
     for (int d = 0; d < 3; ++d) table[4 * v + d] = pos_(v, d) - rest_(v, d);
@@ -224,11 +236,60 @@ Eigen::VectorXd FfdLattice::scatter(const Embedding& e, const Eigen::VectorXd& v
     for (int q = 0; q < st; ++q) {
       const std::size_t slot = std::size_t(p) * st + q;
       const int c = e.couple[slot];
-      if (c < 0 || c >= M_ * M_) throw std::invalid_argument("embedding does not fit this lattice");
+      if (c < 0 || c >= couples_) throw std::invalid_argument("embedding does not fit this lattice");
       out(2 * c) += e.weight[slot] * (1.0 - e.r(p)) * values(p);
       out(2 * c + 1) += e.weight[slot] * e.r(p) * values(p);
     }
   return out;
+}
+
+LatticeTopology grid_topology(int M) {
+  if (M < 2) throw std::invalid_argument("M must be >= 2, got " + std::to_string(M));
+  LatticeTopology t;
+  t.couples = M * M;
+  t.grid_side = M;
+  auto index = [M](int i, int j, int k) { return ((i * M) + j) * 2 + k; };
+  auto add = [&t](int a, int b, std::uint8_t kind) {
+    t.spring_a.push_back(a);
+    t.spring_b.push_back(b);
+    t.kind.push_back(kind);
+  };
+  for (int k = 0; k < 2; ++k)
+    for (int i = 0; i < M; ++i)
+      for (int j = 0; j < M; ++j) {
+        const int v = index(i, j, k);
+        if (j + 1 < M) add(v, index(i, j + 1, k), 0);
+        if (i + 1 < M) add(v, index(i + 1, j, k), 0);
+        if (i + 1 < M && j + 1 < M) {
+          add(v, index(i + 1, j + 1, k), 1);
+          add(index(i, j + 1, k), index(i + 1, j, k), 1);
+        }
+        if (j + 2 < M) add(v, index(i, j + 2, k), 2);
+        if (i + 2 < M) add(v, index(i + 2, j, k), 2);
+      }
+  for (int i = 0; i < M; ++i)
+    for (int j = 0; j < M; ++j) {
+      add(index(i, j, 0), index(i, j, 1), 3);
+      if (j + 1 < M) {
+        add(index(i, j, 0), index(i, j + 1, 1), 4);
+        add(index(i, j, 1), index(i, j + 1, 0), 4);
+      }
+      if (i + 1 < M) {
+        add(index(i, j, 0), index(i + 1, j, 1), 4);
+        add(index(i, j, 1), index(i + 1, j, 0), 4);
+      }
+    }
+  t.nbr_offset.assign(1, 0);
+  const int di[4] = {-1, 1, 0, 0}, dj[4] = {0, 0, -1, 1};
+  for (int i = 0; i < M; ++i)
+    for (int j = 0; j < M; ++j) {
+      for (int q = 0; q < 4; ++q) {
+        const int oi = i + di[q], oj = j + dj[q];
+        if (oi >= 0 && oi < M && oj >= 0 && oj < M) t.nbr_index.push_back(oi * M + oj);
+      }
+      t.nbr_offset.push_back(static_cast<int>(t.nbr_index.size()));
+    }
+  return t;
 }
 
 }  // namespace thinburn

@@ -34,11 +34,35 @@ struct Embedding {
   Eigen::Index size() const { return r.size(); }
 };
 
+/// @brief Which control vertices are joined by springs, and which couples are neighbours.
+///
+/// Spring kinds: 0 structure (neighbouring couples, per layer), 1 shear (a grid cell's
+/// diagonals, per layer), 2 flex (couples two apart, per layer), 3 thickness (a couple's own
+/// bottom-top), 4 transverse (bottom of one couple to the top of a neighbour, and back).
+struct LatticeTopology {
+  int couples = 0;
+  int grid_side = 0;                  ///< M for an M x M grid lattice, 0 on a control surface
+  std::vector<int> spring_a, spring_b;  ///< control vertex indices (2 couple + layer)
+  std::vector<std::uint8_t> kind;
+  /// Neighbours of couple c: nbr_index[nbr_offset[c] .. nbr_offset[c+1]) (the structure springs').
+  std::vector<int> nbr_offset, nbr_index;
+  int springs() const { return static_cast<int>(kind.size()); }
+};
+
+/// @brief The paper's M x M lattice (§4.1, Fig. 3): structure, shear and flex springs per layer,
+/// then per couple its thickness spring and the transverse pairs to its +j and +i neighbours;
+/// neighbours in the order (i-1, j), (i+1, j), (i, j-1), (i, j+1).
+LatticeTopology grid_topology(int M);
+
 /// @brief An M x M lattice of couples: rest and current positions of its 2 M^2 control vertices.
 class FfdLattice {
  public:
   /// @brief rest: (2 M^2) x 3 rest positions of the control vertices (M >= 2, finite).
   FfdLattice(int M, const RowMatX3& rest);
+  /// @brief A lattice whose couples follow a shell's control surface (not a grid): rest has
+  /// 2 * couples rows, vertex 2 c + k of couple c (k = 1 top). M() is 0 and embed() refuses;
+  /// points are embedded by the control surface (control_surface.hpp).
+  static FfdLattice on_surface(int couples, const RowMatX3& rest);
 
   /// @brief Embed points. params: n x 3 lattice coordinates (s in [0, M-1] along rows i, t in
   /// [0, M-1] along columns j, r in [0, 1] bottom -> top); rest_points: their rest positions.
@@ -65,15 +89,18 @@ class FfdLattice {
   const RowMatX3& positions() const { return pos_; }
   /// @brief Rest control positions ((2 M^2) x 3).
   const RowMatX3& rest() const { return rest_; }
-  /// @brief Couples per side.
+  /// @brief Couples per side of a grid lattice; 0 for a lattice on a shell's control surface.
   int M() const { return M_; }
-  /// @brief Number of control vertices, 2 M^2.
-  int size() const { return 2 * M_ * M_; }
+  /// @brief Number of couples (M^2 on a grid).
+  int couples() const { return couples_; }
+  /// @brief Number of control vertices, 2 couples.
+  int size() const { return 2 * couples_; }
   /// @brief Index of control vertex (i, j, k).
   int index(int i, int j, int k) const { return ((i * M_) + j) * 2 + k; }
 
  private:
-  int M_;
+  FfdLattice(const RowMatX3& rest, int M, int couples);
+  int M_, couples_;
   RowMatX3 rest_, pos_;
 };
 
