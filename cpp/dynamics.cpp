@@ -364,6 +364,13 @@ void LatticeDynamics::set_pinned(const std::vector<std::uint8_t>& pinned) {
   std::fill(awake_.begin(), awake_.end(), 1);
 }
 
+void LatticeDynamics::set_floor_offsets(const Eigen::VectorXd& offsets) {
+  require(offsets.size() == 0 || offsets.size() == n_, "floor offsets: one per control vertex expected");
+  require(offsets.allFinite(), "floor offsets must be finite");
+  floor_offset_ = offsets;
+  std::fill(awake_.begin(), awake_.end(), 1);
+}
+
 void LatticeDynamics::set_wind(const Eigen::Vector3d& w) {
   require(w.allFinite(), "wind must be finite");
   if (w == wind_) return;
@@ -544,7 +551,7 @@ Eigen::Map<Eigen::Matrix3d> mat3(double* base, int slot) {
 }  // namespace
 
 Eigen::Vector3d LatticeDynamics::supported(int v, Eigen::Vector3d f) const {
-  if (!p_.has_floor || lat_.positions()(v, 2) > p_.floor_z || f.z() >= 0.0) return f;
+  if (!p_.has_floor || lat_.positions()(v, 2) > floor_at(v) || f.z() >= 0.0) return f;
   const double normal = -f.z();
   f.z() = 0.0;
   const double t = std::hypot(f.x(), f.y());
@@ -730,7 +737,7 @@ void LatticeDynamics::implicit_assemble(double h) {
     const Eigen::Vector3d f = vertex_force(v, x, vel_);
     vec3(B.f, a) = f;
     contact_(v) = -1.0;
-    if (p_.has_floor && x(v, 2) <= p_.floor_z) {
+    if (p_.has_floor && x(v, 2) <= floor_at(v)) {
       const double vz_free = vel_(v, 2) + h * f.z() / mass_(v);
       if (vz_free <= 0.0) contact_(v) = -vz_free;
     }
@@ -780,7 +787,7 @@ Eigen::Vector3d LatticeDynamics::substep_drift(int v, double h) const {
   // resting sheet off the table but does not drag it across. Without this, repeated crumples
   // with plastic rest lengths walk a sheet across the floor like an inchworm.
   if (slot_[v] >= 0 && contact_(v) >= 0.0) {
-    u.z() = std::max(u.z(), 0.0) + (p_.floor_z - lat_.positions()(v, 2)) / h;
+    u.z() = std::max(u.z(), 0.0) + (floor_at(v) - lat_.positions()(v, 2)) / h;
     if (p_.friction > 0.0) u.x() = u.y() = 0.0;
   }
   return u;
@@ -828,7 +835,7 @@ bool LatticeDynamics::add_landings(double h) {
     const double z = end_z(v);
     const int partner = v ^ 1;
     const bool partner_down = slot_[partner] >= 0 && contact_(partner) >= 0.0;
-    if (z < p_.floor_z && (partner_down || z <= end_z(partner))) list_.push_back(v);
+    if (z < floor_at(v) && (partner_down || z <= end_z(partner))) list_.push_back(v);
   }
   for (int v : list_) {  // after the loop: the test above reads contact_ of partners
     const int a = slot_[v];
@@ -1063,7 +1070,7 @@ int LatticeDynamics::implicit_substep(double h) {
     x.row(v) += h * (vel_.row(v) + u.transpose());
     // A contact lands exactly on the floor (+ the crumple's lift), not a rounding below or
     // above it, so that the next substep's contact test finds it there.
-    if (contact_(v) >= 0.0) x(v, 2) = p_.floor_z + h * std::max(drift_(v, 2), 0.0);
+    if (contact_(v) >= 0.0) x(v, 2) = floor_at(v) + h * std::max(drift_(v, 2), 0.0);
   });
   return iterations;
 }
@@ -1094,9 +1101,9 @@ void LatticeDynamics::apply_floor(double h) {
     // floor removed (from the contact filter, or from the projection below).
     double removed = -1.0;
     if (implicit && contact_(v) >= 0.0) removed = contact_(v);
-    if (x(v, 2) < p_.floor_z) {
+    if (x(v, 2) < floor_at(v)) {
       removed = std::max(0.0, -vel_(v, 2));
-      x(v, 2) = p_.floor_z;
+      x(v, 2) = floor_at(v);
       vel_(v, 2) = std::max(0.0, vel_(v, 2));
     }
     if (removed < 0.0) continue;

@@ -121,6 +121,10 @@ class LatticeDynamics {
   const Eigen::VectorXd& strength() const { return strength_; }
   /// @brief Per control vertex; pinned ones never move.
   void set_pinned(const std::vector<std::uint8_t>& pinned);
+  /// @brief Per control vertex, its height above floor_z at which it touches the floor (empty:
+  /// 0 for all). A shell's couples need not reach its lowest points: a lantern's lowest couples
+  /// sit above its rim, so they rest that much above the floor.
+  void set_floor_offsets(const Eigen::VectorXd& offsets);
   /// @brief Wind velocity, m/s.
   void set_wind(const Eigen::Vector3d& w);
   /// @brief Set positions and velocities ((2 M^2) x 3 each); everything wakes.
@@ -208,8 +212,11 @@ class LatticeDynamics {
   Eigen::Vector3d supported(int v, Eigen::Vector3d f) const;
   void wake_around_forcing();
 
+  double floor_at(int v) const { return floor_offset_.size() ? p_.floor_z + floor_offset_[v] : p_.floor_z; }
+
   FfdLattice& lat_;
   DynamicsParams p_;
+  Eigen::VectorXd floor_offset_;  // per vertex, empty: none
   LatticeTopology topo_;
   int C_, n_;  // couples, control vertices
   // Springs: endpoints, kind, rest length; per-vertex incidence (CSR, fixed order).

@@ -27,28 +27,88 @@ int choose_lattice(int N, double size_u, double size_v) {
 
 Shell::Shell(const Sheet& sheet, const ShellParams& params, const std::vector<double>& cell_mass,
              const std::vector<std::uint8_t>& pinned)
-    : sheet_(sheet), params_(params) {
-  const int N = sheet_.cells();
-  M_ = params_.lattice > 0 ? params_.lattice : choose_lattice(N, sheet_.size_u(), sheet_.size_v());
+    : sheet_(&sheet), params_(params) {
+  const int N = sheet.cells();
+  M_ = params_.lattice > 0 ? params_.lattice : choose_lattice(N, sheet.size_u(), sheet.size_v());
   if (M_ < 2) throw std::invalid_argument("lattice must be >= 2");
-  const double spacing = std::min(sheet_.size_u(), sheet_.size_v()) / (M_ - 1);
+  const double spacing = std::min(sheet.size_u(), sheet.size_v()) / (M_ - 1);
   thickness_ = params_.lattice_thickness > 0 ? params_.lattice_thickness : 0.25 * spacing;
   lattice_ = std::make_unique<FfdLattice>(M_, drape());
 
-  const RowMatX2& vp = sheet_.vertex_param();
+  const RowMatX2& vp = sheet.vertex_param();
   RowMatX3 coords(vp.rows(), 3);
   for (Eigen::Index i = 0; i < vp.rows(); ++i) {
-    const Eigen::Vector2d st = sheet_.lattice_st(vp(i, 0), vp(i, 1), M_);
+    const Eigen::Vector2d st = sheet.lattice_st(vp(i, 0), vp(i, 1), M_);
     coords.row(i) << st.x(), st.y(), 0.5;
   }
-  vertex_embedding_ = lattice_->embed(coords, sheet_.vertices());
+  vertex_embedding_ = lattice_->embed(coords, sheet.vertices());
+  cell_area_.assign(N * N, sheet.du() * sheet.dv());
+  // Eq 3 sums over the ignition points, the burning cells: the same fire at twice the grid
+  // resolution has four times the points. Each cell counts as its share of a cell of the
+  // paper's 128 x 128 grid, so pyrolysis (and the bend) does not depend on N, and N = 128
+  // is the paper's Cp.
+  const double per_paper_cell = static_cast<double>(kPaperCells) / N;
+  finish(cell_mass, N * N, sheet.inside(), grid_topology(M_), per_paper_cell * per_paper_cell);
+  if (!pinned.empty()) pin(pinned);
+}
 
+Shell::Shell(const SurfaceCells& cells, const RowMatX3& vertices, const RowMatX3i& faces,
+             const ShellParams& params, const std::vector<double>& cell_mass,
+             const std::vector<std::uint8_t>& pinned)
+    : params_(params) {
+  // The grid's choice (one couple per 16 cells, none finer than 2 cm, 4..65 per side) with
+  // sqrt(area) for the side; an explicit lattice counts couples along sqrt(area).
+  const double side = std::sqrt(cells.total_area());
+  double spacing = params_.lattice > 0 ? side / (params_.lattice - 1)
+                                       : std::clamp(std::max(16.0 * cells.spacing(), 0.02), side / 64.0, side / 3.0);
+  if (params_.lattice == 1) throw std::invalid_argument("lattice must be >= 2");
+  thickness_ = params_.lattice_thickness > 0 ? params_.lattice_thickness : 0.25 * spacing;
+  control_ = std::make_unique<ControlSurface>(vertices, faces, spacing, thickness_);
+  lattice_ = std::make_unique<FfdLattice>(FfdLattice::on_surface(control_->couples(), control_->rest()));
+  surface_vertices_ = control_->embed(vertices);
+  RowMatX3 centres(cells.size(), 3);
+  for (int c = 0; c < cells.size(); ++c) centres.row(c) = cells.positions()[c].transpose();
+  surface_cells_ = control_->embed(centres);
+  cell_area_ = cells.areas();
+  const double paper_cell = cells.total_area() / (kPaperCells * kPaperCells);
+  const double per_paper_cell = (cells.total_area() / cells.size()) / paper_cell;
+  finish(cell_mass, cells.size(), std::vector<std::uint8_t>(cells.size(), 1), control_->topology(), per_paper_cell);
+  if (params_.has_floor) set_floor_offsets();
+  if (!pinned.empty()) pin(pinned);
+}
+
+void Shell::set_floor_offsets() {
+  // A control vertex touches the floor when the lowest mesh point it carries a fair share of
+  // does (at the rest pose's heights): a lantern's lowest couples sit above its rim. The
+  // dynamics' floor is already half a thickness down (finish), as for a flat sheet's bottom layer.
+  constexpr double kCarried = 0.1;
+  constexpr int S = SurfaceEmbedding::kStencil;
+  const int C = lattice_->couples();
+  Eigen::VectorXd low = Eigen::VectorXd::Constant(C, std::numeric_limits<double>::infinity());
+  for (Eigen::Index i = 0; i < surface_vertices_.size(); ++i)
+    for (int q = 0; q < S; ++q)
+      if (surface_vertices_.share[std::size_t(i) * S + q] > kCarried) {
+        const int c = surface_vertices_.couple[std::size_t(i) * S + q];
+        low[c] = std::min(low[c], surface_vertices_.rest(i, 2));
+      }
+  const RowMatX3& rest = lattice_->rest();
+  Eigen::VectorXd offset(lattice_->size());
+  for (int v = 0; v < lattice_->size(); ++v) {
+    const double z_low = std::isfinite(low[v / 2]) ? low[v / 2] : 0.5 * (rest(v & ~1, 2) + rest(v | 1, 2));
+    offset[v] = rest(v, 2) - z_low + 0.5 * thickness_;
+  }
+  dynamics_->set_floor_offsets(offset);
+}
+
+void Shell::finish(const std::vector<double>& cell_mass, int num_cells, const std::vector<std::uint8_t>& inside,
+                   const LatticeTopology& topology, double per_paper_cell) {
   // Cell masses and areas onto the couples, half to each layer.
-  control_mass_ = Eigen::VectorXd::Zero(2 * M_ * M_);
-  control_area_ = Eigen::VectorXd::Zero(2 * M_ * M_);
-  burnt_area_ = Eigen::VectorXd::Zero(2 * M_ * M_);
-  for (int c = 0; c < N * N; ++c) {
-    if (!sheet_.inside()[c]) continue;
+  const int nv = lattice_->size();
+  control_mass_ = Eigen::VectorXd::Zero(nv);
+  control_area_ = Eigen::VectorXd::Zero(nv);
+  burnt_area_ = Eigen::VectorXd::Zero(nv);
+  for (int c = 0; c < num_cells; ++c) {
+    if (!inside[c]) continue;
     add_cell_mass(c, cell_mass[c]);
     add_cell_area(c, control_area_);
   }
@@ -57,33 +117,40 @@ Shell::Shell(const Sheet& sheet, const ShellParams& params, const std::vector<do
   // The mid-surface rests on the floor, so the bottom layer is held half a thickness lower.
   dp.has_floor = params_.has_floor;
   dp.floor_z = params_.floor_z - 0.5 * thickness_;
-  dynamics_ = std::make_unique<LatticeDynamics>(*lattice_, dp);
+  dynamics_ = std::make_unique<LatticeDynamics>(*lattice_, dp, topology);
   mass_dirty_ = true;
   dynamics_->set_areas(control_area_);
-  if (!pinned.empty()) pin(pinned);
 
   ParticleParams pp = params_.particles;
   pp.seed = params_.seed ^ 0x5bd1e995ULL;
   particles_ = std::make_unique<ParticleSystem>(pp);
-  // Eq 3 sums over the ignition points, the burning cells: the same fire at twice the grid
-  // resolution has four times the points. Each cell counts as its share of a cell of the
-  // paper's 128 x 128 grid, so pyrolysis (and the bend) does not depend on N, and N = 128
-  // is the paper's Cp.
   BendingParams bp = params_.bending;
-  const double per_paper_cell = static_cast<double>(kPaperCells) / N;
-  bp.cp *= per_paper_cell * per_paper_cell;
-  bending_ = std::make_unique<Bending>(M_ * M_, bp);
+  bp.cp *= per_paper_cell;
+  bending_ = std::make_unique<Bending>(lattice_->couples(), bp);
 }
 
 void Shell::pin(const std::vector<std::uint8_t>& pinned) {
-  // A pinned vertex holds every couple its position depends on, both layers.
-  const RowMatX2& vp = sheet_.vertex_param();
-  std::vector<std::uint8_t> held(2 * M_ * M_, 0);
+  // A pinned vertex holds every couple its position depends on, both layers; on a control
+  // surface, the couples whose window carries a fair share of it (the rest barely move it).
+  constexpr double kHeldShare = 0.05;
+  std::vector<std::uint8_t> held(lattice_->size(), 0);
+  if (control_) {
+    constexpr int S = SurfaceEmbedding::kStencil;
+    for (std::size_t i = 0; i < pinned.size(); ++i)
+      for (int q = 0; pinned[i] && q < S; ++q)
+        if (surface_vertices_.share[i * S + q] > kHeldShare) {
+          const int c = surface_vertices_.couple[i * S + q];
+          held[2 * c] = held[2 * c + 1] = 1;
+        }
+    dynamics_->set_pinned(held);
+    return;
+  }
+  const RowMatX2& vp = sheet_->vertex_param();
   for (Eigen::Index i = 0; i < vp.rows(); ++i) {
     if (!pinned[i]) continue;
     int cp[4];
     double w[4];
-    const Eigen::Vector2d st = sheet_.lattice_st(vp(i, 0), vp(i, 1), M_);
+    const Eigen::Vector2d st = sheet_->lattice_st(vp(i, 0), vp(i, 1), M_);
     bilinear_couples(st.x(), st.y(), cp, w);
     for (int k = 0; k < 4; ++k)
       if (w[k] > 1e-12) held[2 * cp[k]] = held[2 * cp[k] + 1] = 1;
@@ -109,7 +176,7 @@ RowMatX3 Shell::drape() const {
   // Couple (i, j) sits on the rest surface at parameter (u_j, v_i), its two vertices half the
   // thickness either side along the surface normal; the cell grid is interpolated (and
   // extrapolated half a cell at the border) to find that surface point.
-  const int N = sheet_.cells();
+  const int N = sheet_->cells();
   RowMatX3 rest(2 * M_ * M_, 3);
   auto sample = [&](const RowMatX3& grid, double fr, double fc) {
     const int r0 = std::clamp(static_cast<int>(std::floor(fr)), 0, N - 2);
@@ -120,11 +187,11 @@ RowMatX3 Shell::drape() const {
   };
   for (int i = 0; i < M_; ++i)
     for (int j = 0; j < M_; ++j) {
-      const double fr = i * sheet_.size_v() / (M_ - 1) / sheet_.dv() - 0.5;
-      const double fc = j * sheet_.size_u() / (M_ - 1) / sheet_.du() - 0.5;
-      const Eigen::Vector3d mid = sample(sheet_.cell_rest(), fr, fc);
-      Eigen::Vector3d n = sample(sheet_.cell_rest_normal(), fr, fc);
-      n = n.norm() > 0 ? Eigen::Vector3d(n.normalized()) : sheet_.frame().n;
+      const double fr = i * sheet_->size_v() / (M_ - 1) / sheet_->dv() - 0.5;
+      const double fc = j * sheet_->size_u() / (M_ - 1) / sheet_->du() - 0.5;
+      const Eigen::Vector3d mid = sample(sheet_->cell_rest(), fr, fc);
+      Eigen::Vector3d n = sample(sheet_->cell_rest_normal(), fr, fc);
+      n = n.norm() > 0 ? Eigen::Vector3d(n.normalized()) : sheet_->frame().n;
       rest.row((i * M_ + j) * 2 + 0) = (mid - 0.5 * thickness_ * n).transpose();
       rest.row((i * M_ + j) * 2 + 1) = (mid + 0.5 * thickness_ * n).transpose();
     }
@@ -132,16 +199,17 @@ RowMatX3 Shell::drape() const {
 }
 
 void Shell::cell_couples(int cell, int* couple, double* w) const {
-  const int N = sheet_.cells();
-  const Eigen::Vector2d st = sheet_.lattice_st((cell % N + 0.5) * sheet_.du(), (cell / N + 0.5) * sheet_.dv(), M_);
+  const int N = sheet_->cells();
+  const Eigen::Vector2d st = sheet_->lattice_st((cell % N + 0.5) * sheet_->du(), (cell / N + 0.5) * sheet_->dv(), M_);
   bilinear_couples(st.x(), st.y(), couple, w);
 }
 
 Eigen::Vector3d Shell::cell_position(int cell) const {
+  if (control_) return control_->point(surface_cells_, cell, lattice_->positions());
   // Rest position plus the lattice's displacement at the cell centre, mid-thickness: the same
   // trilinear FFD as the mesh's vertices, evaluated for one point on demand, so only the cells
   // the front and the emitters touch are ever deformed.
-  Eigen::Vector3d p = sheet_.cell_rest().row(cell).transpose();
+  Eigen::Vector3d p = sheet_->cell_rest().row(cell).transpose();
   int cp[4];
   double w[4];
   cell_couples(cell, cp, w);
@@ -152,7 +220,13 @@ Eigen::Vector3d Shell::cell_position(int cell) const {
   return p;
 }
 
+Eigen::Vector3d Shell::cell_normal(int cell) const {
+  if (!control_) throw std::logic_error("cell_normal: a grid lattice's cells take their normals from the grid");
+  return control_->normal(surface_cells_, cell, lattice_->positions());
+}
+
 void Shell::quad_displacement_bounds(RowMatX3& lo, RowMatX3& hi) const {
+  if (control_) throw std::logic_error("quad_displacement_bounds: a control surface has no grid quads");
   // A quad's cells move by convex combinations of its four couples' mid-layer displacements.
   const RowMatX3& x = lattice_->positions();
   const RowMatX3& x0 = lattice_->rest();
@@ -173,23 +247,35 @@ void Shell::quad_displacement_bounds(RowMatX3& lo, RowMatX3& hi) const {
     }
 }
 
-void Shell::add_cell_mass(int cell, double dm) {
+template <class F>
+void Shell::for_cell_shares(int cell, F&& f) const {
+  if (control_) {
+    constexpr int S = SurfaceEmbedding::kStencil;
+    for (int q = 0; q < S; ++q) {
+      const double w = surface_cells_.share[std::size_t(cell) * S + q];
+      if (w > 0.0) f(surface_cells_.couple[std::size_t(cell) * S + q], w);
+    }
+    return;
+  }
   int cp[4];
   double w[4];
   cell_couples(cell, cp, w);
-  for (int k = 0; k < 4; ++k) {
-    control_mass_[2 * cp[k]] += 0.5 * w[k] * dm;
-    control_mass_[2 * cp[k] + 1] += 0.5 * w[k] * dm;
-  }
+  for (int k = 0; k < 4; ++k) f(cp[k], w[k]);
+}
+
+void Shell::add_cell_mass(int cell, double dm) {
+  for_cell_shares(cell, [&](int c, double w) {
+    control_mass_[2 * c] += 0.5 * w * dm;
+    control_mass_[2 * c + 1] += 0.5 * w * dm;
+  });
   mass_dirty_ = true;
 }
 
 void Shell::add_cell_area(int cell, Eigen::VectorXd& onto) const {
-  int cp[4];
-  double w[4];
-  cell_couples(cell, cp, w);
-  for (int k = 0; k < 4; ++k)
-    for (int layer = 0; layer < 2; ++layer) onto[2 * cp[k] + layer] += 0.5 * w[k] * sheet_.du() * sheet_.dv();
+  const double a = cell_area_[cell];
+  for_cell_shares(cell, [&](int c, double w) {
+    for (int layer = 0; layer < 2; ++layer) onto[2 * c + layer] += 0.5 * w * a;
+  });
 }
 
 void Shell::cell_burnt(int cell, double mass_lost) {
@@ -207,12 +293,13 @@ void Shell::set_dynamics_params(const DynamicsParams& p) {
 }
 
 void Shell::vertex_positions(RowMatX3& out) const {
-  out.resize(sheet_.vertices().rows(), 3);
+  const double z_min = params_.has_floor ? params_.floor_z : -std::numeric_limits<double>::infinity();
+  if (control_) return control_->deform(surface_vertices_, lattice_->positions(), out, z_min);
+  out.resize(sheet_->vertices().rows(), 3);
   // The lattice's bottom layer is held half a thickness below the floor; the surface itself
   // never goes through it. Clamped inside deform's pass: a second pass over a strided column
   // cost as much as the deform itself on a million-vertex mesh.
-  lattice_->deform(vertex_embedding_, out,
-                   params_.has_floor ? params_.floor_z : -std::numeric_limits<double>::infinity());
+  lattice_->deform(vertex_embedding_, out, z_min);
 }
 
 void Shell::hand_over_masses_and_strength() {

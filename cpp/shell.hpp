@@ -13,10 +13,12 @@
 #include <vector>
 
 #include "bending.hpp"
+#include "control_surface.hpp"
 #include "dynamics.hpp"
 #include "lattice.hpp"
 #include "particles.hpp"
 #include "sheet.hpp"
+#include "surface_cells.hpp"
 
 namespace thinburn {
 
@@ -43,19 +45,31 @@ struct ShellSources {
 
 class Shell {
  public:
+  /// @brief The paper's shell: an M x M grid lattice over a flat sheet's cells.
   /// @param cell_mass per cell, kg (0 outside the sheet); @param pinned per input vertex,
   /// nonzero = held in place (may be empty).
   Shell(const Sheet& sheet, const ShellParams& params, const std::vector<double>& cell_mass,
         const std::vector<std::uint8_t>& pinned);
+  /// @brief Any shell: a lattice on a control surface fitted to the mesh (control_surface.hpp),
+  /// over cells on the surface itself. params.lattice counts couples along sqrt(area).
+  Shell(const SurfaceCells& cells, const RowMatX3& vertices, const RowMatX3i& faces,
+        const ShellParams& params, const std::vector<double>& cell_mass,
+        const std::vector<std::uint8_t>& pinned);
 
+  /// @brief M couples per side on a grid lattice, 0 on a control surface.
   int size() const { return M_; }
+  int couples() const { return lattice_->couples(); }
   double thickness() const { return thickness_; }
+  /// @brief The control surface (null on a grid lattice).
+  const ControlSurface* control_surface() const { return control_.get(); }
 
-  /// @brief The couples a cell's centre sits between and their bilinear weights.
+  /// @brief Grid lattice: the couples a cell's centre sits between and their bilinear weights.
   void cell_couples(int cell, int* couple, double* w) const;
   /// @brief A cell centre's position now (mid-thickness of the lattice).
   Eigen::Vector3d cell_position(int cell) const;
-  /// @brief Per control cell of the lattice ((M-1)^2 rows), the lowest and highest
+  /// @brief Control surface: the layer's normal at a cell now (bottom -> top).
+  Eigen::Vector3d cell_normal(int cell) const;
+  /// @brief Grid lattice: per control cell ((M-1)^2 rows), the lowest and highest
   /// displacement its cells can have now: their four couples' extremes.
   void quad_displacement_bounds(RowMatX3& lo, RowMatX3& hi) const;
 
@@ -85,12 +99,20 @@ class Shell {
  private:
   RowMatX3 drape() const;
   void bilinear_couples(double s, double t, int* couple, double* w) const;
+  template <class F>
+  void for_cell_shares(int cell, F&& f) const;  // f(couple, share) over the couples carrying the cell
   void add_cell_mass(int cell, double dm);
   void add_cell_area(int cell, Eigen::VectorXd& onto) const;  // half to each layer
+  void finish(const std::vector<double>& cell_mass, int num_cells, const std::vector<std::uint8_t>& inside,
+              const LatticeTopology& topology, double per_paper_cell);
   void pin(const std::vector<std::uint8_t>& pinned);
+  void set_floor_offsets();
   void hand_over_masses_and_strength();
 
-  const Sheet& sheet_;
+  const Sheet* sheet_ = nullptr;              // grid lattice
+  std::unique_ptr<ControlSurface> control_;   // control surface
+  SurfaceEmbedding surface_vertices_, surface_cells_;
+  std::vector<double> cell_area_;
   ShellParams params_;
   int M_ = 0;
   double thickness_ = 0.0;

@@ -4,6 +4,7 @@
 #include "bending.hpp"
 #include "cell_locator.hpp"
 #include "dynamics.hpp"
+#include "fire_cells.hpp"
 #include "fire_front.hpp"
 #include "lattice.hpp"
 #include "particles.hpp"
@@ -21,10 +22,18 @@ namespace thinburn {
 /// @brief Cell states, as in the paper §3.1.
 enum CellState : std::uint8_t { kUnburnt = 0, kBurning = 1, kBurnt = 2 };
 
+/// @brief Where the fire's cells and the lattice live (issue #11; docs/surface_front.md).
+enum class Geometry {
+  Auto,    ///< Plane for a flat mesh, Surface for any other
+  Plane,   ///< the paper's N x N grid over the rest plane (or UV) and an M x M lattice
+  Surface  ///< cells on the surface itself and a lattice on a control surface fitted to it
+};
+
 /// @brief Every scalar the simulation needs; the Python layer fills it from a material preset.
 struct SimulationParams {
   int cells = 128;
-  FrontMethod front = FrontMethod::Fmm2;
+  Geometry geometry = Geometry::Auto;
+  FrontMethod front = FrontMethod::Fmm2;  ///< the grid's front (Plane); Surface has its own
   std::uint64_t seed = 0;
   // Spread (eq 1): V = V0·(1 − Cv·grad²), floored at v_floor·V0.
   double v0 = 0.0035;          ///< m/s
@@ -69,7 +78,17 @@ class Simulation {
   void step(double dt);
 
   double time() const { return time_; }
-  const Sheet& sheet() const { return sheet_; }
+  /// @brief Plane or Surface (never Auto): the geometry chosen.
+  Geometry geometry() const { return grid_ ? Geometry::Plane : Geometry::Surface; }
+  /// @brief The cells and their front.
+  const FireCells& fire_cells() const { return *cells_; }
+  int num_cells() const { return cells_->size(); }
+  /// @brief The grid sheet (Plane); throws std::invalid_argument on a Surface simulation.
+  const Sheet& sheet() const;
+  /// @brief The surface cells (Surface); throws std::invalid_argument on a Plane simulation.
+  const SurfaceCells& surface_cells() const;
+  /// @brief The input mesh's vertices (rest).
+  const RowMatX3& vertices() const { return vertices_; }
   const SimulationParams& params() const { return params_; }
   void set_wind(const Eigen::Vector3d& w) { wind_ = w; }
   const Eigen::Vector3d& wind() const { return wind_; }
@@ -84,24 +103,31 @@ class Simulation {
   std::vector<double> cell_char() const;
   /// @brief Remaining mass per cell, kg.
   std::vector<double> cell_mass() const { return mass_; }
-  /// @brief Current positions of the cell centres (N*N x 3).
+  /// @brief Current positions of the cell centres (one row per cell).
   RowMatX3 cell_positions() const;
   RowMatX3 vertex_positions() const;
   Eigen::VectorXd vertex_char() const;
   Eigen::VectorXd vertex_ignition_times() const;
   Eigen::VectorXd vertex_burnout_times() const;
   /// @brief Cells in the front's narrow band: the active set of the eikonal solver.
-  std::size_t front_active() const { return front_.num_trial(); }
+  std::size_t front_active() const { return cells_->num_trial(); }
   std::size_t num_burning() const { return burning_.size(); }
-  /// @brief The local spread law at a cell now (eq 1 and the drive vector).
+  /// @brief The local spread law at a cell now (eq 1 and the drive vector in grid axes; Plane).
   LocalSpeed local_speed(int cell) const;
+  /// @brief Eq 1's speed at a cell now, m/s (either geometry).
+  double cell_speed(int cell) const;
+  /// @brief Unit normal of a cell now.
+  Eigen::Vector3d cell_normal(int cell) const;
   /// @brief grad² at a cell: squared slope of the current surface out of the rest plane.
   double grad2(int cell) const;
 
   bool has_shell() const { return shell_ != nullptr; }
   int lattice_size() const { return shell_ ? shell_->size() : 0; }
   double lattice_thickness() const { return shell_ ? shell_->thickness() : 0.0; }
-  /// @brief Control vertices ((2 M^2) x 3), index ((i*M)+j)*2+k, k = 1 top.
+  /// @brief Couples of the lattice (M^2 on a grid).
+  int lattice_couples() const { return shell_ ? shell_->couples() : 0; }
+  /// @brief Control vertices (2 couples x 3), index 2 couple + k, k = 1 top; on a grid
+  /// couple = i*M + j.
   const RowMatX3& lattice_positions() const;
   /// @brief The shell's parts (null without a shell).
   const Shell* shell() const { return shell_.get(); }
@@ -116,7 +142,6 @@ class Simulation {
 
  private:
   Eigen::Vector3d cell_position(int cell) const;
-  Eigen::Vector3d cell_normal(int cell) const;
   struct Saved;
   bool step_may_throw() const;
   void step_unguarded(double dt);
@@ -129,13 +154,18 @@ class Simulation {
   void step_shell(double dt);
   void gather_shell_sources();
   double flame_side(int cell) const;
+  void bind_cells();
+  void refresh_law();
   double noise(int cell, std::uint64_t stream) const;
-  double hash_uniform(std::uint64_t stream, std::uint64_t key) const;
+  std::vector<int> scan_cells_near(const Eigen::Vector3d& point, double radius, double* nearest_distance, int* nearest) const;
 
   SimulationParams params_;
-  Sheet sheet_;
-  FireFront front_;
-  SpeedFn speed_fn_;
+  RowMatX3 vertices_;
+  std::unique_ptr<FireCells> cells_;
+  const GridCells* grid_ = nullptr;    // cells_ when it is the grid
+  const ShellCells* surface_ = nullptr;  // cells_ when it is on the surface
+  SpreadLaw law_;
+  CellView view_;
   double time_ = 0.0;
   Eigen::Vector3d wind_ = Eigen::Vector3d::Zero();
   std::vector<std::uint8_t> state_;

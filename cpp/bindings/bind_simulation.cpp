@@ -36,22 +36,44 @@ std::string front_name(FrontMethod m) {
 }
 
 int checked_cell(const Simulation& s, int cell) {
-  if (cell < 0 || cell >= s.sheet().num_cells())
-    throw std::invalid_argument("cell: index " + std::to_string(cell) + " outside [0, N*N)");
+  if (cell < 0 || cell >= s.num_cells())
+    throw std::invalid_argument("cell: index " + std::to_string(cell) + " outside [0, " +
+                                std::to_string(s.num_cells()) + ")");
   return cell;
 }
 
+// Per-cell values: (N, N) on the grid (geometry 'plane'), one per cell on a surface.
 template <class T>
-py::array_t<T> grid(const std::vector<T>& v, int n) {
-  py::array_t<T> a({n, n});
+py::array_t<T> per_cell(const Simulation& s, const std::vector<T>& v) {
+  py::array_t<T> a = s.geometry() == Geometry::Plane
+                         ? py::array_t<T>({s.sheet().cells(), s.sheet().cells()})
+                         : py::array_t<T>(static_cast<py::ssize_t>(v.size()));
   std::copy(v.begin(), v.end(), a.mutable_data());
   return a;
+}
+
+Geometry geometry_from_name(const std::string& name) {
+  if (name == "auto") return Geometry::Auto;
+  if (name == "plane") return Geometry::Plane;
+  if (name == "surface") return Geometry::Surface;
+  throw std::invalid_argument("geometry: unknown value '" + name + "' (auto, plane or surface)");
+}
+
+std::string geometry_name(Geometry g) {
+  switch (g) {
+    case Geometry::Auto: return "auto";
+    case Geometry::Plane: return "plane";
+    case Geometry::Surface: return "surface";
+  }
+  return "auto";
 }
 
 void define_params(py::module_& m) {
   py::class_<SimulationParams> p(m, "SimulationParams", "Every scalar of a simulation (SI units).");
   p.def(py::init<>())
       .def_readwrite("cells", &SimulationParams::cells)
+      .def_property("geometry", [](const SimulationParams& s) { return geometry_name(s.geometry); },
+                    [](SimulationParams& s, const std::string& n) { s.geometry = geometry_from_name(n); })
       .def_property("front", [](const SimulationParams& s) { return front_name(s.front); },
                     [](SimulationParams& s, const std::string& n) { s.front = front_from_name(n); })
       .def_readwrite("seed", &SimulationParams::seed)
@@ -109,18 +131,40 @@ void define_simulation(py::module_& m) {
       .def_property_readonly("params", [](const S& s) { return s.params(); },
                              "A copy of the parameters in force now.")
       .def_property("wind", &S::wind, &S::set_wind)
-      .def_property_readonly("cells", [](const S& s) { return s.sheet().cells(); })
-      .def_property_readonly("cell_size", [](const S& s) { return py::make_tuple(s.sheet().dv(), s.sheet().du()); })
-      .def_property_readonly("area", [](const S& s) { return s.sheet().area(); })
-      .def("inside", [](const S& s) { return grid(s.sheet().inside(), s.sheet().cells()); })
-      .def("cell_states", [](const S& s) { return grid(s.cell_states(), s.sheet().cells()); })
-      .def("ignition_times", [](const S& s) { return grid(s.ignition_times(), s.sheet().cells()); })
-      .def("burn_durations", [](const S& s) { return grid(s.burn_durations(), s.sheet().cells()); })
-      .def("cell_char", [](const S& s) { return grid(s.cell_char(), s.sheet().cells()); })
-      .def("cell_mass", [](const S& s) { return grid(s.cell_mass(), s.sheet().cells()); })
+      .def_property_readonly("geometry", [](const S& s) { return geometry_name(s.geometry()); })
+      .def_property_readonly("cells", [](const S& s) { return s.geometry() == Geometry::Plane ? s.sheet().cells() : s.params().cells; })
+      .def_property_readonly("num_cells", &S::num_cells)
+      .def_property_readonly("cell_spacing", [](const S& s) { return s.fire_cells().spacing(); })
+      .def_property_readonly("cell_size", [](const S& s) {
+        const bool plane = s.geometry() == Geometry::Plane;
+        const double h = s.fire_cells().spacing();
+        return py::make_tuple(plane ? s.sheet().dv() : h, plane ? s.sheet().du() : h);
+      })
+      .def_property_readonly("area", [](const S& s) { return s.fire_cells().total_area(); })
+      .def("inside", [](const S& s) { return per_cell(s, s.fire_cells().inside()); })
+      .def("cell_states", [](const S& s) { return per_cell(s, s.cell_states()); })
+      .def("ignition_times", [](const S& s) { return per_cell(s, s.ignition_times()); })
+      .def("burn_durations", [](const S& s) { return per_cell(s, s.burn_durations()); })
+      .def("cell_char", [](const S& s) { return per_cell(s, s.cell_char()); })
+      .def("cell_mass", [](const S& s) { return per_cell(s, s.cell_mass()); })
+      .def("cell_areas", [](const S& s) {
+        std::vector<double> a(s.num_cells());
+        for (int c = 0; c < s.num_cells(); ++c) a[c] = s.fire_cells().area(c);
+        return per_cell(s, a);
+      })
       .def("fringe", &S::fringe)
       .def("cell_positions", &S::cell_positions)
-      .def("cell_rest_positions", [](const S& s) { return s.sheet().cell_rest(); })
+      .def("cell_normals", [](const S& s) {
+        RowMatX3 n(s.num_cells(), 3);
+        for (int c = 0; c < s.num_cells(); ++c) n.row(c) = s.cell_normal(c).transpose();
+        return n;
+      })
+      .def("cell_rest_positions", [](const S& s) {
+        RowMatX3 p(s.num_cells(), 3);
+        for (int c = 0; c < s.num_cells(); ++c) p.row(c) = s.fire_cells().rest(c).transpose();
+        return p;
+      })
+      .def("cell_speed", [](const S& s, int cell) { return s.cell_speed(checked_cell(s, cell)); }, py::arg("cell"))
       .def("vertex_positions",
            [](const S& s, int threads) {
              // The mesh's FFD is the one parallel loop outside a step: the Simulation's count too.
@@ -134,9 +178,10 @@ void define_simulation(py::module_& m) {
       .def("vertex_burnout_times", &S::vertex_burnout_times)
       .def("cells_to_vertices",
            [](const S& s, const Eigen::VectorXd& field) {
-             if (field.size() != s.sheet().num_cells()) throw std::invalid_argument("field: expected N*N values");
-             Eigen::VectorXd out(s.sheet().vertices().rows());
-             s.sheet().cells_to_vertices(field.data(), out.data());
+             if (field.size() != s.num_cells())
+               throw std::invalid_argument("field: expected one value per cell (" + std::to_string(s.num_cells()) + ")");
+             Eigen::VectorXd out(s.vertices().rows());
+             s.fire_cells().cells_to_vertices(field.data(), out.data());
              return out;
            },
            py::arg("field"))
@@ -151,6 +196,7 @@ void define_simulation(py::module_& m) {
       .def("num_burning", &S::num_burning)
       .def_property_readonly("has_shell", &S::has_shell)
       .def_property_readonly("lattice_size", &S::lattice_size)
+      .def_property_readonly("lattice_couples", &S::lattice_couples)
       .def_property_readonly("lattice_thickness", &S::lattice_thickness)
       .def("lattice_positions", &S::lattice_positions)
       .def("lattice_rest_positions", [](const S& s) { return s.lattice() ? s.lattice()->rest() : RowMatX3(0, 3); })

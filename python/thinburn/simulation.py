@@ -13,6 +13,11 @@ from .materials import Material, resolve_material
 FRONT_METHODS = ("cellular", "cellular16", "fmm1", "fmm")
 
 INTEGRATORS = ("implicit", "symplectic", "explicit")
+# Where the cells and the lattice live (docs/surface_front.md, "Which cells"): "plane", the
+# paper's N x N grid over the rest plane (or the UV map) and an M x M lattice; "surface", cells
+# on the surface itself and a lattice on a control surface fitted to it; "auto", the plane for
+# a flat mesh (or for the cellular fronts, defined on a grid only), the surface for any other.
+GEOMETRIES = ("auto", "plane", "surface")
 
 # Coordinates the model can take (r6, measured): offsets up to 1e6 m keep the motion within
 # 1e-8 m of the same sheet at the origin (1e8 m: 3e-7 m, 1e10 m: 5e-5 m); a sheet smaller than
@@ -69,7 +74,15 @@ class Simulation:
     uv : optional (n, 2) float array; the rest parameterisation. Without it the mesh is
         projected on its best-fit plane.
     material : a preset name from ``thinburn.MATERIALS`` or a ``thinburn.Material``.
-    cells : N, the sheet is divided into N×N cells (the paper uses 128).
+    cells : N, the sheet is divided into N×N cells (the paper uses 128); on a curved shell
+        about N² cells of even size cover its surface.
+    geometry : one of ``GEOMETRIES``. "auto" (the default): a flat mesh gets the paper's grid
+        (N×N cells over its plane, an M×M lattice); any other shell (a lantern, a sphere, a
+        folded letter, a stack of sheets) gets cells on its surface, where the fire spreads by
+        distances on the surface, and a lattice whose couples follow it. "plane" forces the
+        grid (the UV map, when given, is its parameterisation), "surface" the surface. Per-cell
+        arrays are (N, N) on the grid and (num_cells,) on a surface; lattice arrays are
+        (M, M, 2, ...) on the grid and (couples, 2, ...) on a surface.
     seed : seeds every random draw; the same inputs and seed give bit-identical results.
     threads : thread count of the core (None: all logical cores). Results never depend on it.
     front : fire-front method, one of ``FRONT_METHODS``: "fmm" (second-order fast marching,
@@ -119,7 +132,7 @@ class Simulation:
 
     def __init__(self, vertices, faces, uv=None, material="paper", cells=128, seed=0,
                  threads=None, front="fmm", lattice=None, pinned=None, floor=None,
-                 integrator="implicit", shell=True, **params):
+                 integrator="implicit", shell=True, geometry="auto", **params):
         verts = V.real_array(vertices, "vertices", (-1, 3))
         if len(verts) < 3:
             raise ValueError(f"vertices: an empty mesh (need >= 3 vertices, got {len(verts)})")
@@ -133,6 +146,9 @@ class Simulation:
         p = self._params(self.material, V.integer(cells, "cells", low=2, high=4096),
                          V.integer(seed, "seed", low=0, high=2**63 - 1),
                          V.choice(front, "front", FRONT_METHODS), params)
+        p.geometry = V.choice(geometry, "geometry", GEOMETRIES)
+        if p.geometry == "auto" and front in ("cellular", "cellular16"):
+            p.geometry = "plane"  # the paper's rule is defined on the grid
         if not isinstance(shell, (bool, np.bool_)):
             raise TypeError(f"shell must be a bool, got {type(shell).__name__}")
         p.shell = bool(shell)
@@ -218,12 +234,15 @@ class Simulation:
         return self._sim.ignite(p, t, r)
 
     def cells_near(self, point, radius=0.0) -> np.ndarray:
-        """(k, 2) [row, col] of the cells ``ignite(point, radius=radius)`` would light: the
-        nearest inside cell, or every inside cell within radius. Costs about the lattice's
-        size, not the number of cells. Raises ValueError as ignite does."""
+        """The cells ``ignite(point, radius=radius)`` would light: the nearest inside cell, or
+        every inside cell within radius; (k, 2) [row, col] on the grid, (k,) cell indices on
+        a surface. On the grid it costs about the lattice's size, not the number of cells; on
+        a surface it scans the cells. Raises ValueError as ignite does."""
         p = V.vector3(point, "point")
         r = V.real(radius, "radius", low=0.0)
         cells = np.asarray(self._sim.cells_near(p, r), dtype=np.int64)
+        if self.geometry == "surface":
+            return cells
         return np.stack([cells // self.cells, cells % self.cells], axis=1)
 
     def step(self, dt) -> None:
@@ -293,41 +312,46 @@ class Simulation:
         """Distance between a couple's top and bottom control vertices, m."""
         return self._sim.lattice_thickness
 
+    @property
+    def lattice_couples(self) -> int:
+        """Number of couples of the lattice (M² on the grid; 0 without a shell)."""
+        return self._sim.lattice_couples
+
+    def _couples(self, values, what: str, *tail) -> np.ndarray:
+        # (M, M, *tail) on the grid, (couples, *tail) on a control surface.
+        m = self._require_shell(what)
+        lead = (m, m) if m else (self._sim.lattice_couples,)
+        return np.asarray(values()).reshape(*lead, *tail)
+
     def lattice_positions(self) -> np.ndarray:
-        """(M, M, 2, 3) control vertices: [row, column, 0 bottom / 1 top, xyz]."""
-        m = self._require_shell("lattice_positions")
-        return self._sim.lattice_positions().reshape(m, m, 2, 3)
+        """(M, M, 2, 3) control vertices: [row, column, 0 bottom / 1 top, xyz]; (couples, 2, 3)
+        on a surface."""
+        return self._couples(self._sim.lattice_positions, "lattice_positions", 2, 3)
 
     def lattice_rest_positions(self) -> np.ndarray:
-        """(M, M, 2, 3) control vertices at rest."""
-        m = self._require_shell("lattice_rest_positions")
-        return self._sim.lattice_rest_positions().reshape(m, m, 2, 3)
+        """(M, M, 2, 3) control vertices at rest; (couples, 2, 3) on a surface."""
+        return self._couples(self._sim.lattice_rest_positions, "lattice_rest_positions", 2, 3)
 
     def heat(self) -> np.ndarray:
-        """(M, M, 2) heat accumulated at the control vertices (eq 2)."""
-        m = self._require_shell("heat")
-        return self._sim.heat().reshape(m, m, 2)
+        """(M, M, 2) heat accumulated at the control vertices (eq 2); (couples, 2) on a surface."""
+        return self._couples(self._sim.heat, "heat", 2)
 
     def pyrolysis(self) -> np.ndarray:
-        """(M, M, 2) pyrolysis at the control vertices now (eq 3)."""
-        m = self._require_shell("pyrolysis")
-        return self._sim.pyrolysis().reshape(m, m, 2)
+        """(M, M, 2) pyrolysis at the control vertices now (eq 3); (couples, 2) on a surface."""
+        return self._couples(self._sim.pyrolysis, "pyrolysis", 2)
 
     def rotation(self) -> np.ndarray:
-        """(M, M) the rotation D per couple (eqs 4-6), radians."""
-        m = self._require_shell("rotation")
-        return self._sim.rotation().reshape(m, m)
+        """(M, M) the rotation D per couple (eqs 4-6), radians; (couples,) on a surface."""
+        return self._couples(self._sim.rotation, "rotation")
 
     def control_masses(self) -> np.ndarray:
         """(M, M, 2) sheet mass mapped onto each control vertex, kg (falls as cells burn)."""
-        m = self._require_shell("control_masses")
-        return self._sim.control_masses().reshape(m, m, 2)
+        return self._couples(self._sim.control_masses, "control_masses", 2)
 
     def control_strength(self) -> np.ndarray:
         """(M, M, 2) share of the lattice springs' stiffness each control vertex keeps: 1 where
         the sheet is intact, down to ash_strength where all it carries burnt."""
-        m = self._require_shell("control_strength")
-        return self._sim.control_strength().reshape(m, m, 2)
+        return self._couples(self._sim.control_strength, "control_strength", 2)
 
     def particles(self):
         """(positions (k, 3), temperatures (k,)) of the live fire particles."""
@@ -357,11 +381,43 @@ class Simulation:
             raise ValueError(f"{what}: this simulation was made with shell=False")
         return self._sim.lattice_size
 
+    def _cell_shape(self, *tail) -> tuple:
+        n = self.cells
+        return (n, n, *tail) if self.geometry == "plane" else (self.num_cells, *tail)
+
     # --- results -------------------------------------------------------------------------
     @property
+    def geometry(self) -> str:
+        """"plane" (the N×N grid) or "surface" (cells on the surface), as chosen."""
+        return self._sim.geometry
+
+    @property
     def cells(self) -> int:
-        """N: the sheet has N×N cells."""
+        """N: the sheet has N×N cells (on a surface: about N² cells, see num_cells)."""
         return self._sim.cells
+
+    @property
+    def num_cells(self) -> int:
+        """Number of cells (N² on the grid)."""
+        return self._sim.num_cells
+
+    @property
+    def cell_spacing(self) -> float:
+        """Distance between neighbouring cells, m (on the grid sqrt(du dv))."""
+        return self._sim.cell_spacing
+
+    def cell_areas(self) -> np.ndarray:
+        """Area of each cell, m² (per-cell shape)."""
+        return self._sim.cell_areas()
+
+    def cell_normals(self) -> np.ndarray:
+        """Unit normal of each cell now (per-cell shape, then 3)."""
+        return self._sim.cell_normals().reshape(self._cell_shape(3))
+
+    def cell_speed(self, cell) -> float:
+        """Eq 1's spread speed at a cell now, m/s; cell is a flat index (row * N + col on the grid)."""
+        c = V.integer(cell, "cell", low=0, high=self.num_cells - 1)
+        return self._sim.cell_speed(c)
 
     @property
     def cell_size(self) -> tuple:
@@ -393,15 +449,15 @@ class Simulation:
         return self._sim.cell_mass()
 
     def fringe(self) -> np.ndarray:
-        """(N, N) bool: burning cells with a neighbour neither burning nor burnt (paper §3.1)."""
-        n = self.cells
-        mask = np.zeros(n * n, dtype=bool)
+        """(N, N) bool: burning cells with a neighbour neither burning nor burnt (paper §3.1);
+        (num_cells,) on a surface."""
+        mask = np.zeros(self.num_cells, dtype=bool)
         mask[np.asarray(self._sim.fringe(), dtype=np.int64)] = True
-        return mask.reshape(n, n)
+        return mask.reshape(self._cell_shape())
 
     def cell_positions(self) -> np.ndarray:
-        """(N, N, 3) current cell-centre positions."""
-        return self._sim.cell_positions().reshape(self.cells, self.cells, 3)
+        """(N, N, 3) current cell-centre positions; (num_cells, 3) on a surface."""
+        return self._sim.cell_positions().reshape(self._cell_shape(3))
 
     def vertex_positions(self) -> np.ndarray:
         """(n, 3) current positions of the input mesh's vertices."""
@@ -420,13 +476,16 @@ class Simulation:
         return self._sim.vertex_burnout_times()
 
     def cells_to_vertices(self, field) -> np.ndarray:
-        """Interpolate any (N, N) per-cell field to the input vertices (bilinear over inside cells)."""
-        n = self.cells
-        f = V.real_array(field, "field", (n, n))
+        """Interpolate any per-cell field ((N, N) on the grid, (num_cells,) on a surface) to the
+        input vertices (bilinear over inside cells; on a surface, over the cells' triangles)."""
+        f = V.real_array(field, "field", self._cell_shape())
         return self._sim.cells_to_vertices(f.ravel())
 
     def local_speed(self, row, col) -> tuple:
-        """(v, e_row, e_col): the spread law now at a cell (eq 1 and the drive vector)."""
+        """(v, e_row, e_col): the spread law now at a cell (eq 1 and the drive vector in grid
+        axes). The grid only (geometry "plane"); cell_speed serves both."""
+        if self.geometry != "plane":
+            raise ValueError("local_speed: row and col exist on the grid only (geometry 'plane'); use cell_speed(cell)")
         n = self.cells
         r = V.integer(row, "row", low=0, high=n - 1)
         c = V.integer(col, "col", low=0, high=n - 1)

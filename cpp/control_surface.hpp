@@ -1,0 +1,82 @@
+#pragma once
+/// @brief The lattice of a curved shell (paper §4.1, Fig. 3; issue #11; docs/lattice.md):
+/// couples on a coarse control surface fitted to the shell, and the shell's points embedded
+/// smoothly in the layer between them.
+///
+/// The control surface is a SurfaceCells sampling of the shell at the lattice's spacing: its
+/// cells are the couples' mid-points (on the shell), their normals the couples' axes, and
+/// their triangulation gives the springs: structure along its edges, flex across each interior
+/// edge (the two opposite corners), thickness per couple, transverse along each edge. The
+/// paper's grid lattice is the special case of a flat sheet (grid_topology, FfdLattice::embed);
+/// this class serves every other shell: tubes, spheres, folds, pieces.
+///
+/// Embedding. A point x gets weights over the couples within R of it (3 rings of its nearest
+/// couple on the control surface, so the far side of a fold or another piece never counts):
+/// moving least squares, linear in x's tangent plane, with Wendland C2 window functions. The
+/// weights sum to 1, reproduce linear motion of the layer exactly and are C2 in x, so a fine
+/// mesh shows no lattice facets. A point follows the mid-surface's displacement, plus its rest
+/// offset along the layer's interpolated normal turned with the layer: a curved shell's points,
+/// which lie off the couples' interpolated mid-surface by the sag of the curve, stay at that
+/// offset across the layer as it bends.
+#include <Eigen/Core>
+
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <vector>
+
+#include "lattice.hpp"
+#include "surface_cells.hpp"
+
+namespace thinburn {
+
+/// @brief Points embedded in a control surface's lattice.
+struct SurfaceEmbedding {
+  static constexpr int kStencil = 12;  ///< couples per point (unused slots: weight 0)
+  std::vector<std::int32_t> couple;    ///< n * kStencil couple indices
+  std::vector<double> weight;          ///< n * kStencil MLS weights (sum 1; may be < 0)
+  std::vector<double> share;           ///< n * kStencil window shares (>= 0, sum 1): mass, area, pins
+  RowMatX3 rest;                       ///< n x 3 rest positions
+  RowMatX3 rest_normal;                ///< n x 3 the layer's interpolated unit normal at rest
+  Eigen::VectorXd offset;              ///< n: rest offset along rest_normal from the interpolated mid-surface
+  Eigen::Index size() const { return rest.rows(); }
+};
+
+class ControlSurface {
+ public:
+  /// @brief The control surface of the mesh at `spacing` (m) between couples; the layer is
+  /// `thickness` thick (m, > 0). Throws std::invalid_argument naming `vertices`/`faces` for a
+  /// mesh SurfaceCells refuses, or `lattice` when the spacing leaves fewer than 3 couples on a
+  /// piece or a couple without neighbours.
+  ControlSurface(const SurfVerts& vertices, const SurfFaces& faces, double spacing, double thickness);
+
+  int couples() const { return coarse_->size(); }
+  double spacing() const { return coarse_->spacing(); }
+  double thickness() const { return thickness_; }
+  /// @brief Rest positions of the control vertices (2 couples x 3; 2 c + 1 the top of couple c).
+  const RowMatX3& rest() const { return rest_; }
+  const LatticeTopology& topology() const { return topo_; }
+  const SurfaceCells& cells() const { return *coarse_; }
+
+  /// @brief Embed rest points lying on (or near) the shell.
+  SurfaceEmbedding embed(const RowMatX3& points) const;
+  /// @brief Deformed positions of all embedded points from the lattice's control positions;
+  /// heights below z_min are raised to it. Parallel over points, bit-identical for any count.
+  void deform(const SurfaceEmbedding& e, const RowMatX3& control, RowMatX3& out,
+              double z_min = -std::numeric_limits<double>::infinity()) const;
+  /// @brief Deformed position of embedded point i.
+  Eigen::Vector3d point(const SurfaceEmbedding& e, Eigen::Index i, const RowMatX3& control) const;
+  /// @brief The layer's unit normal (bottom -> top) at embedded point i now.
+  Eigen::Vector3d normal(const SurfaceEmbedding& e, Eigen::Index i, const RowMatX3& control) const;
+
+ private:
+  void build_topology();
+  void gather(int start, std::vector<int>& out, std::vector<int>& stamp, int& id) const;
+
+  std::shared_ptr<const SurfaceCells> coarse_;
+  double thickness_;
+  RowMatX3 rest_;
+  LatticeTopology topo_;
+};
+
+}  // namespace thinburn

@@ -1,0 +1,243 @@
+#include "fire_cells.hpp"
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace thinburn {
+namespace {
+
+std::uint64_t mix(std::uint64_t x) {
+  x += 0x9e3779b97f4a7c15ULL;
+  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
+  return x ^ (x >> 31);
+}
+
+// Real sheets vary over centimetres, not per cell: a smooth value-noise field between random
+// values every kNoiseScale cells, plus a little per-cell grain.
+constexpr int kNoiseScale = 10;
+constexpr double kSmoothShare = 0.75;
+
+}  // namespace
+
+double seeded_uniform(std::uint64_t seed, std::uint64_t stream, std::uint64_t key) {
+  const std::uint64_t h = mix(seed ^ mix(stream * 0x100000001b3ULL + key));
+  return 2.0 * (static_cast<double>(h >> 11) * 0x1.0p-53) - 1.0;
+}
+
+// ---------------------------------------------------------------------------------------------
+// GridCells
+
+GridCells::GridCells(std::shared_ptr<const Sheet> sheet, FrontMethod method)
+    : sheet_(std::move(sheet)), front_(sheet_->cells(), sheet_->cells(), sheet_->dv(), sheet_->du(), method) {
+  front_.set_inside(sheet_->inside());
+}
+
+double GridCells::spacing() const { return std::sqrt(sheet_->du() * sheet_->dv()); }
+
+double GridCells::reach() const { return 3.0 * std::max(sheet_->du(), sheet_->dv()); }
+
+double GridCells::noise(int cell, std::uint64_t seed, std::uint64_t stream) const {
+  const int N = sheet_->cells(), r = cell / N, c = cell % N;
+  const int gr = r / kNoiseScale, gc = c / kNoiseScale;
+  const double fr = (r % kNoiseScale + 0.5) / kNoiseScale, fc = (c % kNoiseScale + 0.5) / kNoiseScale;
+  auto node = [&](int i, int j) {
+    return seeded_uniform(seed, stream + 7, (static_cast<std::uint64_t>(i) << 32) | static_cast<std::uint32_t>(j));
+  };
+  const double smooth = (1 - fr) * ((1 - fc) * node(gr, gc) + fc * node(gr, gc + 1)) +
+                        fr * ((1 - fc) * node(gr + 1, gc) + fc * node(gr + 1, gc + 1));
+  return kSmoothShare * smooth + (1.0 - kSmoothShare) * seeded_uniform(seed, stream, static_cast<std::uint64_t>(cell));
+}
+
+Eigen::Vector3d GridCells::normal_from_neighbours(int cell, const CellView& view) const {
+  const int N = sheet_->cells(), r = cell / N, c = cell % N;
+  const int cl = std::max(c - 1, 0), cr = std::min(c + 1, N - 1), rd = std::max(r - 1, 0), ru = std::min(r + 1, N - 1);
+  const Eigen::Vector3d n = (view.position(r * N + cr) - view.position(r * N + cl))
+                                .cross(view.position(ru * N + c) - view.position(rd * N + c));
+  const double len = n.norm();
+  return len > 0 ? Eigen::Vector3d(n / len) : rest_normal(cell);
+}
+
+double GridCells::grad2(int cell, const CellView& view) const {
+  // Rise over run of the current surface out of the rest plane, along rows and columns,
+  // from central differences (one-sided at the outline), squared and summed: |grad h|².
+  const int N = sheet_->cells(), r = cell / N, c = cell % N;
+  const auto& in = sheet_->inside();
+  const Eigen::Vector3d& n = sheet_->frame().n;
+  auto slope2 = [&](int a, int b) {
+    if (a == b) return 0.0;
+    const Eigen::Vector3d d = view.position(b) - view.position(a);
+    const double rise = d.dot(n), run = (d - rise * n).norm();
+    return run > 0 ? (rise * rise) / (run * run) : 0.0;
+  };
+  auto pick = [&](int rr, int cc) { return (rr >= 0 && rr < N && cc >= 0 && cc < N && in[rr * N + cc]) ? rr * N + cc : cell; };
+  return slope2(pick(r, c - 1), pick(r, c + 1)) + slope2(pick(r - 1, c), pick(r + 1, c));
+}
+
+LocalSpeed GridCells::local_speed(int cell, const SpreadLaw& law, const CellView& view) const {
+  LocalSpeed s{law.v(cell), 0.0, 0.0};
+  if (law.drive.isZero()) return s;
+  // The drive vector in grid axes: projected on the local row and column tangents.
+  const int N = sheet_->cells(), r = cell / N, c = cell % N;
+  const int cl = std::max(c - 1, 0), cr = std::min(c + 1, N - 1), rd = std::max(r - 1, 0), ru = std::min(r + 1, N - 1);
+  Eigen::Vector3d t_col = view.position(r * N + cr) - view.position(r * N + cl);
+  Eigen::Vector3d t_row = view.position(ru * N + c) - view.position(rd * N + c);
+  if (t_col.norm() > 0) t_col.normalize();
+  if (t_row.norm() > 0) t_row.normalize();
+  s.e_row = law.drive.dot(t_row);
+  s.e_col = law.drive.dot(t_col);
+  const double e = std::hypot(s.e_row, s.e_col);
+  if (e > law.max_drive) {
+    s.e_row *= law.max_drive / e;
+    s.e_col *= law.max_drive / e;
+  }
+  return s;
+}
+
+SpeedFn GridCells::speed_fn(const SpreadLaw& law, const CellView& view) const {
+  return [this, &law, &view](int cell) { return local_speed(cell, law, view); };
+}
+
+bool GridCells::on_fringe(int cell, const std::vector<std::uint8_t>& state) const {
+  const int N = sheet_->cells(), r = cell / N, col = cell % N;
+  const auto& in = sheet_->inside();
+  for (int dr = -1; dr <= 1; ++dr)
+    for (int dc = -1; dc <= 1; ++dc) {
+      const int rr = r + dr, cc = col + dc;
+      if ((dr || dc) && rr >= 0 && rr < N && cc >= 0 && cc < N && in[rr * N + cc] && state[rr * N + cc] == 0)
+        return true;
+    }
+  return false;
+}
+
+void GridCells::ignite(int cell, double t0, const SpreadLaw& law, const CellView& view) {
+  const int N = sheet_->cells();
+  front_.ignite(FrontSource{static_cast<double>(cell / N), static_cast<double>(cell % N), t0}, speed_fn(law, view));
+}
+
+const std::vector<int>& GridCells::advance(double t_end, const SpreadLaw& law, const CellView& view) {
+  return front_.advance(t_end, speed_fn(law, view));
+}
+
+// ---------------------------------------------------------------------------------------------
+// ShellCells
+
+ShellCells::ShellCells(const RowMatX3& vertices, const RowMatX3i& faces, int cells)
+    : cells_([&] {
+        CellOptions opt;
+        opt.cells = cells;
+        return std::make_shared<const SurfaceCells>(vertices, faces, opt);
+      }()),
+      front_(cells_) {
+  inside_.assign(cells_->size(), 1);
+  const auto& vc = cells_->vertex_cells();
+  const auto& vw = cells_->vertex_weights();
+  vertex_cell_.resize(vc.size());
+  for (std::size_t i = 0; i < vc.size(); ++i) {
+    int best = 0;
+    for (int k = 1; k < 3; ++k)
+      if (vw[i][k] > vw[i][best]) best = k;
+    vertex_cell_[i] = vc[i][best];
+  }
+  noise_scale_ = kNoiseScale * cells_->spacing();
+}
+
+double ShellCells::noise(int cell, std::uint64_t seed, std::uint64_t stream) const {
+  // The grid's value noise in 3-D: trilinear between random values on a cubic lattice of
+  // kNoiseScale cells' spacing, so the field does not depend on how cells are numbered.
+  const Eigen::Vector3d q = cells_->positions()[cell] / noise_scale_;
+  const Eigen::Vector3d f = q.array().floor();
+  const Eigen::Vector3d a = q - f;
+  const std::int64_t base[3] = {static_cast<std::int64_t>(f.x()), static_cast<std::int64_t>(f.y()),
+                                static_cast<std::int64_t>(f.z())};
+  double smooth = 0.0;
+  for (int corner = 0; corner < 8; ++corner) {
+    double w = 1.0;
+    std::uint64_t key = 0;
+    for (int d = 0; d < 3; ++d) {
+      const int bit = (corner >> d) & 1;
+      w *= bit ? a[d] : 1.0 - a[d];
+      key = mix(key ^ static_cast<std::uint64_t>(base[d] + bit));
+    }
+    smooth += w * seeded_uniform(seed, stream + 7, key);
+  }
+  return kSmoothShare * smooth + (1.0 - kSmoothShare) * seeded_uniform(seed, stream, static_cast<std::uint64_t>(cell));
+}
+
+Eigen::Vector3d ShellCells::normal_from_neighbours(int cell, const CellView& view) const {
+  // Area-weighted normal of the cell's fan of triangles now, oriented as at rest.
+  Eigen::Vector3d n = Eigen::Vector3d::Zero();
+  const Eigen::Vector3d n0 = rest_normal(cell);
+  for (int q = cells_->fan_offset()[cell]; q < cells_->fan_offset()[cell + 1]; ++q) {
+    const auto& t = cells_->triangles()[cells_->fan_index()[q]];
+    const Eigen::Vector3d a = view.position(t[0]), b = view.position(t[1]), c = view.position(t[2]);
+    Eigen::Vector3d m = (b - a).cross(c - a);
+    // Triangle corners are stored sorted, not oriented: orient each by its rest normal.
+    const Eigen::Vector3d m0 = (rest(t[1]) - rest(t[0])).cross(rest(t[2]) - rest(t[0]));
+    if (m0.dot(n0) < 0) m = -m;
+    n += m;
+  }
+  const double len = n.norm();
+  return len > 0 ? Eigen::Vector3d(n / len) : n0;
+}
+
+double ShellCells::grad2(int cell, const CellView& view) const {
+  // The grid's |grad h|^2 is tan^2 of the angle the surface turned out of its rest plane; on a
+  // shell, the angle its normal turned from the rest normal.
+  const double c = std::clamp(view.normal(cell).dot(rest_normal(cell)), -1.0, 1.0);
+  if (c <= 1e-6) return 1e12;  // turned by 90 degrees or more: as steep as it gets
+  return (1.0 - c * c) / (c * c);
+}
+
+SurfaceSpeed ShellCells::local_speed(int cell, const SpreadLaw& law, const CellView& view) const {
+  SurfaceSpeed s{law.v(cell)};
+  if (law.drive.isZero()) return s;
+  const Eigen::Vector3d n = view.normal(cell), n0 = rest_normal(cell);
+  Eigen::Vector3d e = law.drive - law.drive.dot(n) * n;  // along the sheet now
+  // Carried to the rest tangent plane by the smallest rotation taking n to n0.
+  e = Eigen::Quaterniond::FromTwoVectors(n, n0) * e;
+  e -= e.dot(n0) * n0;
+  const double len = e.norm();
+  if (len > law.max_drive) e *= law.max_drive / len;
+  s.e = e;
+  return s;
+}
+
+SurfaceSpeedFn ShellCells::speed_fn(const SpreadLaw& law, const CellView& view) const {
+  return [this, &law, &view](int cell) { return local_speed(cell, law, view); };
+}
+
+bool ShellCells::on_fringe(int cell, const std::vector<std::uint8_t>& state) const {
+  for (int q = cells_->nbr_offset()[cell]; q < cells_->nbr_offset()[cell + 1]; ++q)
+    if (state[cells_->nbr_index()[q]] == 0) return true;
+  return false;
+}
+
+void ShellCells::ignite(int cell, double t0, const SpreadLaw& law, const CellView& view) {
+  front_.ignite_cell(cell, t0, speed_fn(law, view));
+}
+
+const std::vector<int>& ShellCells::advance(double t_end, const SpreadLaw& law, const CellView& view) {
+  return front_.advance(t_end, speed_fn(law, view));
+}
+
+void ShellCells::cells_to_vertices(const double* v, double* out) const {
+  const auto& vc = cells_->vertex_cells();
+  const auto& vw = cells_->vertex_weights();
+  for (std::size_t i = 0; i < vc.size(); ++i) {
+    // Clamped to the values combined, as on the grid: a field in [0, 1] stays there.
+    double s = 0, lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (int k = 0; k < 3; ++k) {
+      if (vw[i][k] == 0.0) continue;
+      s += vw[i][k] * v[vc[i][k]];
+      lo = std::min(lo, v[vc[i][k]]);
+      hi = std::max(hi, v[vc[i][k]]);
+    }
+    out[i] = lo <= hi ? std::clamp(s, lo, hi) : s;
+  }
+}
+
+}  // namespace thinburn
