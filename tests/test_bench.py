@@ -1,5 +1,7 @@
-"""python -m thinburn.bench --quick: rows for every part and method, exact checks on the
-fire front's errors, the symplectic stability limit, and valid images; the performance parts
+"""python -m thinburn.bench --quick: rows for every part and method, the fronts' errors on
+cases no method is exact on (the grid front's converge with its order, the surface front's
+fall with resolution; the closed form they are scored against checked on its own), the
+symplectic stability limit, and valid images; the performance parts
 (ffd, frames, scaling, active) on tiny configurations: fields present, values positive and
 finite, the FFD bound's arithmetic. No timing is asserted."""
 import json
@@ -12,6 +14,7 @@ from PIL import Image
 
 import thinburn
 from thinburn import FRONT_METHODS
+from thinburn import _bench_fronts as fronts
 from thinburn import _bench_perf as perf
 from thinburn import _core
 from thinburn import bench
@@ -23,7 +26,8 @@ from thinburn.lattice import flat_rest
 @pytest.fixture(scope="module")
 def quick_run(tmp_path_factory):
     out = tmp_path_factory.mktemp("bench")
-    assert bench.main(["--quick", "--parts", "fire_front", "integrators", "heat", "--out", out]) == 0
+    assert bench.main(["--quick", "--parts", "fire_front", "surface_front", "integrators", "heat",
+                       "--out", out]) == 0
     with open(out / "results.json") as f:
         rows = json.load(f)
     return out, rows
@@ -35,26 +39,108 @@ def test_rows_for_every_part_and_method(quick_run):
     for r in rows:
         methods.setdefault(r["part"], set()).add(r["method"])
     assert methods["fire_front"] == set(FRONT_METHODS)
+    assert methods["surface_front"] == set(fronts.SURFACE_SHAPES)
     assert methods["integrators"] == set(bench.INTEGRATORS)
     assert methods["stability"] == set(bench.INTEGRATORS)
     assert methods["heat"] == {"direct", "fast"}
     for r in rows:
-        if r["part"] == "stability":
+        if r["part"] in ("stability", "fit"):
             continue
         assert math.isfinite(r["error"]) and r["error"] >= 0, r
         assert r["seconds"] > 0, r
 
 
+def _by_method(rows, part):
+    out = {}
+    for r in sorted((r for r in rows if r["part"] == part), key=lambda r: r["resolution"]):
+        out.setdefault(r["method"], []).append(r)
+    return out
+
+
 def test_fire_front_errors(quick_run):
+    """The grid front on v = 1 + 2x: no method is exact, the cellular rules do not converge,
+    fast marching does, fmm at second order in the mean."""
     _, rows = quick_run
-    front = [r for r in rows if r["part"] == "fire_front"]
-    assert {r["resolution"] for r in front} == {65, 129, 257}
-    for r in front:
-        if r["method"] == "fmm":
-            assert r["error"] < 1e-9, r
-        if r["method"] == "cellular":
-            # the octagonal front is 1/cos(22.5 deg) - 1 = 8.24 % late along the 22.5 deg rays
-            assert abs(r["error"] - 0.0824) < 0.002, r
+    front = _by_method(rows, "fire_front")
+    for method, rs in front.items():
+        assert [r["resolution"] for r in rs] == [65, 129, 257]
+        for r in rs:
+            assert r["case"] == "gradient" and r["cells"] == r["resolution"] ** 2
+            assert r["error"] > 1e-5 and r["mean_error"] > 1e-6, r  # not exact by construction
+            assert r["mean_error"] <= r["error"] and r["us_per_cell"] > 0
+    for method in ("cellular", "cellular16"):  # a property of the stencil: not converging
+        errs = [r["error"] for r in front[method]]
+        assert max(errs) < 1.15 * min(errs), errs
+        assert max(errs) <= {"cellular": 0.0824, "cellular16": 0.0275}[method] + 1e-3
+    for a, b in zip(front["fmm"], front["fmm"][1:]):
+        assert b["mean_error"] < a["mean_error"] / 3.0, (a, b)  # second order: ~4x per halving
+        assert b["error"] < a["error"] / 1.6, (a, b)  # the max sits 8 cells out: ~2x
+    for a, b in zip(front["fmm1"], front["fmm1"][1:]):
+        assert b["mean_error"] < a["mean_error"] / 1.3, (a, b)
+    fits = {r["method"]: r for r in rows if r["part"] == "fit"}
+    assert fits["fire_front_order_fmm"]["mean_order"] > 1.7
+    assert abs(fits["fire_front_order_cellular"]["mean_order"]) < 0.2
+
+
+def test_surface_front_errors_fall_with_resolution(quick_run):
+    _, rows = quick_run
+    surf = _by_method(rows, "surface_front")
+    assert set(surf) == set(fronts.SURFACE_SHAPES)
+    for name, rs in surf.items():
+        assert [r["resolution"] for r in rs] == [16, 32, 64]
+        for r in rs:
+            assert abs(r["cells"] / r["resolution"] ** 2 - 1) < 0.1, r  # about N² cells
+            assert 0 < r["mean_error"] <= r["error"] and r["us_per_cell"] > 0 and r["build_seconds"] > 0
+        for a, b in zip(rs, rs[1:]):
+            assert b["mean_error"] < a["mean_error"] / 1.5, (name, a, b)
+        assert rs[-1]["error"] < rs[0]["error"] / 2, name
+        assert rs[-1]["error"] < 0.02, rs[-1]
+    for r in surf["sheet_gradient"]:  # also scored as the grid front is (>= 8 spacings)
+        assert 0 < r["error_beyond_8h"] <= r["error"]
+    fits = {r["method"]: r for r in rows if r["part"] == "fit"}
+    for name in fronts.SURFACE_SHAPES:
+        assert fits[f"surface_front_order_{name}"]["mean_order"] > 0.7
+        ratio = fits[f"surface_cost_ratio_{name}"]  # a measurement: only its definition checked
+        assert [p[:2] for p in ratio["pairs"]] == [[surf[name][-1]["cells"], 65 * 65]]
+        assert ratio["cost_ratio"] == pytest.approx(
+            surf[name][-1]["us_per_cell"] / front_fmm_us(rows, 65), rel=1e-12)
+
+
+def front_fmm_us(rows, n):
+    (r,) = [r for r in rows if r["part"] == "fire_front" and r["method"] == "fmm" and r["resolution"] == n]
+    return r["us_per_cell"]
+
+
+def test_linear_speed_time_is_the_first_arrival():
+    """The closed form the fronts are scored against: T(source) = 0, |grad T| v = 1 (central
+    differences), and the time along rays shot from the source (RK4 on the ray equations)."""
+    T = fronts.linear_speed_time
+    rng = np.random.default_rng(0)
+    for a, v0 in ((2.0, 1.0), (0.7, 2.5), (4.0, 0.3)):
+        x0, y0 = 0.3, 0.5
+        assert T(x0, y0, x0, y0, a, v0) == 0.0
+        x, y = rng.uniform(0, 1, 200), rng.uniform(0, 1, 200)
+        keep = np.hypot(x - x0, y - y0) > 0.05
+        x, y, e = x[keep], y[keep], 1e-6
+        gx = (T(x + e, y, x0, y0, a, v0) - T(x - e, y, x0, y0, a, v0)) / (2 * e)
+        gy = (T(x, y + e, x0, y0, a, v0) - T(x, y - e, x0, y0, a, v0)) / (2 * e)
+        np.testing.assert_allclose(np.hypot(gx, gy) * v0 * (1 + a * x), 1.0, atol=1e-7)
+
+        def rhs(z):  # position, unit direction, time; dz/ds for the slowness 1/v
+            px, py, dx, dy, _ = z
+            g = a / (1 + a * px)  # grad log v = (g, 0)
+            k = -(g - g * dx * dx)
+            return np.array([dx, dy, k, g * dx * dy, 1.0 / (v0 * (1 + a * px))])
+
+        for ang in np.linspace(-np.pi, np.pi, 9)[:-1]:
+            z, ds = np.array([x0, y0, np.cos(ang), np.sin(ang), 0.0]), 1e-3
+            for _ in range(400):
+                k1 = rhs(z)
+                k2 = rhs(z + ds / 2 * k1)
+                k3 = rhs(z + ds / 2 * k2)
+                k4 = rhs(z + ds * k3)
+                z = z + ds / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+            assert z[4] == pytest.approx(T(z[0], z[1], x0, y0, a, v0), rel=1e-9), (a, ang)
 
 
 def test_integrator_errors_shrink_with_dt(quick_run):
@@ -89,7 +175,7 @@ def test_stability_against_theory(quick_run):
 
 def test_images(quick_run):
     out, _ = quick_run
-    for name in ("speed_accuracy.png", "stability.png"):
+    for name in ("speed_accuracy.png", "fronts.png", "stability.png"):
         path = os.path.join(out, name)
         with Image.open(path) as im:
             im.verify()

@@ -3,9 +3,13 @@
     python -m thinburn.bench [--quick] [--repeat N] [--threads T] [--parts P ...] --out DIR
 
 Parts (in this order; all by default):
-  fire_front   every FRONT_METHODS method from a point source at the grid centre, unit speed;
-               error = max relative error over cells >= 8 cells from the source against the
-               exact distance; n = 65, 129, 257 (--quick) and 513, 1025.
+  fire_front   every FRONT_METHODS method from a point source in the speed v = 1 + 2x on the
+               unit square (closed-form times, no method exact by construction); error = max
+               and mean relative error over cells >= 8 cells from the source; n = 65, 129,
+               257 (--quick) and 513, 1025.
+  surface_front  the surface front (SurfaceCells, SurfaceFront) on a cylinder, a sphere and a
+               cone against exact geodesics, and on the grid front's flat case, at N = 16, 32,
+               64 (--quick) and 128: error against seconds per cell, beside the grid front.
   integrators  one free vertex of a 2 x 2 lattice (the rest pinned) on its thickness springs,
                damped (c = 3 /s): error at T = 1 s against the closed-form damped oscillator,
                relative to the initial displacement, for several dt; plus the largest stable
@@ -28,7 +32,7 @@ Parts (in this order; all by default):
                loaded by processes the bench starts itself: the all-cores / 1-thread ratio.
 
 Writes DIR/results.json (rows {part, method, resolution or dt, error or seconds, ...}; "fit"
-rows hold slopes and ratios), DIR/meta.json, DIR/speed_accuracy.png, DIR/stability.png,
+rows hold slopes and ratios), DIR/meta.json, DIR/speed_accuracy.png, DIR/fronts.png, DIR/stability.png,
 DIR/performance.png, DIR/scaling.png and DIR/threads.png. One progress line per measurement on stderr.
 Seconds of kernels are the best of --repeat runs (default 3; ffd at least 10). Frames: each
 frame's fastest time over --repeat runs of the same deterministic simulation, the thread counts' runs
@@ -48,6 +52,7 @@ import time
 
 import numpy as np
 
+from . import _bench_fronts as fronts
 from . import _bench_perf as perf
 from . import _bench_threads
 from . import _core
@@ -71,11 +76,11 @@ def front_case(name: str, n: int, e=(0.3, 0.4)):
         h = 1.0 / (n - 1)
         x = np.arange(n) * h
         xx, yy = np.meshgrid(x, x)
-        v = 1.0 + 2.0 * xx
-        src = (n // 2, n // 4)
+        v = fronts.GRADIENT_V0 * (1.0 + fronts.GRADIENT_A * xx)
+        src = (n // 2, n // 4)  # (x, y) = (0.25, 0.5) when n - 1 is a multiple of 4
+        exact = fronts.linear_speed_time(xx, yy, x[src[1]], x[src[0]])
         d2 = (xx - x[src[1]]) ** 2 + (yy - x[src[0]]) ** 2
-        exact = np.arccosh(1.0 + 4.0 * d2 / (2.0 * (1.0 + 2.0 * x[src[1]]) * v)) / 2.0
-        return v, src, h, None, exact, np.sqrt(d2) >= 8 * h
+        return v, src, h, None, exact, np.sqrt(d2) >= fronts.GRID_SCORED_BEYOND * h
     if name == "ellipse":
         src = (n // 2, n // 2)
         dr, dc = np.meshgrid(np.arange(n) - src[0], np.arange(n) - src[1], indexing="ij")
@@ -110,16 +115,23 @@ def front_score(t, exact, mask):
                 max_abs=float(np.abs(t - exact).max()))
 
 
-def bench_fire_front(sizes, repeat, log):
+def bench_fire_front(sizes, repeat, log, case="gradient"):
+    """Rows part "fire_front": method, resolution n (n x n cells), case, error (max relative,
+    cells >= 8 from the source), mean_error, max_abs, seconds (ignite + advance, best of
+    `repeat`), cells, us_per_cell. The charted case is "gradient" (v = 1 + 2x): in the
+    uniform "point" case fmm is exact to rounding, so it would chart nothing about accuracy."""
     rows = []
     for method in FRONT_METHODS:
         for n in sizes:
-            speed, src, h, drive, exact, mask = front_case("point", n)
+            speed, src, h, drive, exact, mask = front_case(case, n)
             t, secs = front_solve(speed, src, h, drive, method, repeat)
             s = front_score(t, exact, mask)
-            rows.append(dict(part="fire_front", method=method, resolution=n, error=s["max_rel"],
-                             seconds=secs, mean_error=s["mean_rel"]))
-            log(f"fire_front {method:10s} n={n:5d} error={s['max_rel']:.3e} seconds={secs:.4f}")
+            rows.append(dict(part="fire_front", method=method, resolution=n, case=case,
+                             error=s["max_rel"], mean_error=s["mean_rel"], max_abs=s["max_abs"],
+                             seconds=secs, cells=n * n, us_per_cell=1e6 * secs / (n * n),
+                             scored_beyond_cells=fronts.GRID_SCORED_BEYOND))
+            log(f"fire_front {method:10s} n={n:5d} error={s['max_rel']:.3e} "
+                f"mean={s['mean_rel']:.3e} seconds={secs:.4f}")
     return rows
 
 
@@ -275,7 +287,7 @@ def plot_speed_accuracy(rows, path):
     import matplotlib.pyplot as plt
     parts = [p for p in ("fire_front", "integrators", "heat") if any(r["part"] == p for r in rows)]
     fig, axes = plt.subplots(1, len(parts), figsize=(5.5 * len(parts), 4.5), squeeze=False)
-    titles = dict(fire_front="fire front (point source, max rel. error)",
+    titles = dict(fire_front="fire front (v = 1 + 2x, point source, max rel. error)",
                   integrators="integrators (damped oscillator, T = 1 s)",
                   heat="heat sum (random cloud, vs direct)")
     for ax, part in zip(axes[0], parts):
@@ -371,9 +383,10 @@ def _writable_dir(ap, out):
         ap.error(f"--out {out!r} is not a writable directory: {exc}")
 
 
-PARTS = ("fire_front", "integrators", "heat") + perf.PERF_PARTS + ("threads",)
+PARTS = ("fire_front", "surface_front", "integrators", "heat") + perf.PERF_PARTS + ("threads",)
 FIGURES = (  # file, plotting function, the row parts it draws
     ("speed_accuracy.png", plot_speed_accuracy, ("fire_front", "integrators", "heat")),
+    ("fronts.png", fronts.plot_fronts, ("fire_front", "surface_front")),
     ("stability.png", plot_stability, ("stability",)),
     ("performance.png", perf.plot_performance, ("ffd", "frames")),
     ("scaling.png", perf.plot_scaling, ("scaling", "active")),
@@ -440,6 +453,9 @@ def main(argv=None) -> int:
     if "fire_front" in args.parts:
         sizes = [65, 129, 257] + ([] if args.quick else [513, 1025])
         rows += bench_fire_front(sizes, repeat, log)
+    if "surface_front" in args.parts:
+        rows += fronts.bench_surface_front([16, 32, 64] + ([] if args.quick else [128]), repeat, log)
+    rows += fronts.front_fits(rows)
     if "integrators" in args.parts:
         steps = [50, 100, 200, 400, 800] + ([] if args.quick else [1600, 3200, 6400])
         stiff = [0.25, 1.0, 4.0, 16.0]
