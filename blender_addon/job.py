@@ -120,6 +120,7 @@ class BakeJob:
         self.started = _time.perf_counter()
         self.elapsed = 0.0
         self.message = ""
+        self.warnings = []  # what the bake ignores, in an artist's words (the report shows them)
         self.worker = CoreWorker(lambda: thinburn.Simulation(world, tris, **kwargs), self.dt,
                                  self.want_particles)
         self.worker.start()

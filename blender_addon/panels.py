@@ -46,6 +46,7 @@ class PHYSICS_PT_thinburn(ThinBurnPhysicsPanel, bpy.types.Panel):
         layout.prop(settings, "crumple")
         layout.prop(settings, "igniter_collection")
         layout.prop(settings, "wind_scale")
+        layout.operator("thinburn.quick_burn", icon="LIGHT_SUN")
 
 
 class PHYSICS_PT_thinburn_motion(ThinBurnPhysicsPanel, bpy.types.Panel):
@@ -108,6 +109,7 @@ class PHYSICS_PT_thinburn_cache(ThinBurnPhysicsPanel, bpy.types.Panel):
         row = layout.row(align=True)
         row.operator("thinburn.bake", icon="RENDER_ANIMATION")
         row.operator("thinburn.free_bake", text="Free", icon="TRASH")
+        layout.operator("thinburn.bake_all", icon="RENDER_ANIMATION")
         if settings.baked_file and obj.modifiers.get(materials.CACHE_MODIFIER):
             layout.label(text=f"Baked: {settings.baked_file}", icon="CHECKMARK")
 

@@ -67,6 +67,16 @@ def make_igniter(sheet, location, lit_from=1, radius=0.03, name="Igniter", key_f
     return empty
 
 
+def make_table(top=0.75):
+    """A 1 m cube scaled to a table whose top face is at z = top (its origin at its centre)."""
+    import bpy
+    bpy.ops.mesh.primitive_cube_add(size=1.0, location=(0.0, 0.0, top - 0.05))
+    table = bpy.context.active_object
+    table.scale = (1.0, 1.0, 0.1)
+    bpy.context.view_layer.update()
+    return table
+
+
 def setup_bake(sheet, frames=24, cells=32, cache_dir=None, floor=True):
     """Bake settings for a test: one core thread (results do not depend on it; the test
     machine is small) and, by default, a floor at the sheet's lowest point so that it lies
@@ -95,6 +105,17 @@ def evaluated_positions(obj, frame):
     mesh.vertices.foreach_get("co", co)
     obj.evaluated_get(dg).to_mesh_clear()
     return co.reshape(-1, 3)
+
+
+def evaluated_colours(obj, frame, name="thinburn_char"):
+    """The evaluated mesh's colour attribute at a frame (n, 4)."""
+    import bpy
+    bpy.context.scene.frame_set(frame)
+    dg = bpy.context.evaluated_depsgraph_get()
+    attr = obj.evaluated_get(dg).data.attributes[name]
+    out = np.empty(4 * len(attr.data), dtype=np.float32)
+    attr.data.foreach_get("color", out)
+    return out.reshape(-1, 4)
 
 
 def point_attribute(obj, name):

@@ -201,7 +201,8 @@ def test_panels_draw_existing_properties_and_operators(addon):
     for name in ("enabled", "material", "cells", "lattice", "igniter_collection", "pin_group",
                  "frame_start", "frame_end", "cache_dir", "thinburn.bake", "thinburn.free_bake",
                  "mat_V0", "v_floor", "strength", "radius", "flame_height", "flame_intensity",
-                 "flame_temperature", "embers", "thinburn.add_burn_to_material"):
+                 "flame_temperature", "embers", "thinburn.add_burn_to_material",
+                 "thinburn.quick_burn", "thinburn.bake_all"):
         assert name in drawn, name
 
 

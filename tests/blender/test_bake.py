@@ -9,8 +9,8 @@ import pytest
 bpy = pytest.importorskip("bpy")
 pytestmark = pytest.mark.blender
 
-from blender_helpers import (evaluated_positions, make_igniter, make_sheet,  # noqa: E402
-                             point_attribute, setup_bake)
+from blender_helpers import (evaluated_colours, evaluated_positions, make_igniter, make_sheet,  # noqa: E402
+                             make_table, point_attribute, setup_bake)
 
 FRAMES = 30
 LIT_FROM = 8
@@ -70,15 +70,7 @@ def test_attributes_hold_frames_and_nothing_ignites_before_the_key(addon, baked)
 
 
 def test_viewport_colour_follows_the_frame(addon, baked):
-    def char_colours(frame):
-        bpy.context.scene.frame_set(frame)
-        dg = bpy.context.evaluated_depsgraph_get()
-        mesh = baked.evaluated_get(dg).data
-        attr = mesh.attributes["thinburn_char"]
-        out = np.empty(4 * len(attr.data), dtype=np.float32)
-        attr.data.foreach_get("color", out)
-        return out.reshape(-1, 4)
-
+    char_colours = lambda frame: evaluated_colours(baked, frame)
     before, after = char_colours(LIT_FROM - 1), char_colours(FRAMES)
     assert np.ptp(before[:, :3], axis=0).max() < 1e-6  # all paper before the fire
     assert before[0, :3].sum() - after[0, :3].sum() > 0.5  # the lit corner darkened
@@ -334,19 +326,10 @@ def test_bake_writes_fire_particles_when_the_core_has_them(addon, tmp_path, monk
     assert fire.modifiers["ThinBurn Cache"].filepath.endswith("Sheet_fire.pc2")
 
 
-def _table(top=0.75):
-    """A 1 m cube scaled to a table whose top face is at z = top (its origin at its centre)."""
-    bpy.ops.mesh.primitive_cube_add(size=1.0, location=(0.0, 0.0, top - 0.05))
-    table = bpy.context.active_object
-    table.scale = (1.0, 1.0, 0.1)
-    bpy.context.view_layer.update()
-    return table
-
-
 def test_floor_object_is_the_top_of_the_table_and_the_sheet_clears_it(addon, tmp_path):
     # Issue #14: Floor = Object put the floor at the object's origin (inside a box table) or,
     # for a plane, exactly on the sheet, which z-fights in renders.
-    table = _table(0.75)
+    table = make_table(0.75)
     sheet = make_sheet(z=0.75)  # lying on the table top, as an artist places it
     make_igniter(sheet, (0.0, 0.0, 0.75), lit_from=1, radius=0.03)
     s = setup_bake(sheet, frames=12, cells=16, cache_dir=tmp_path, floor=False)
@@ -361,7 +344,7 @@ def test_floor_object_is_the_top_of_the_table_and_the_sheet_clears_it(addon, tmp
 
 
 def test_a_sheet_inside_its_floor_object_is_refused_in_an_artists_words(addon, tmp_path):
-    table = _table(0.75)
+    table = make_table(0.75)
     sheet = make_sheet(z=0.70)
     make_igniter(sheet, (0.0, 0.0, 0.70), lit_from=1, radius=0.03)
     s = setup_bake(sheet, frames=5, cells=16, cache_dir=tmp_path, floor=False)

@@ -1,0 +1,156 @@
+"""The artist's workflow (issue #14): Quick Burn, Bake All, caches per file and per object,
+warnings for what the bake ignores, names in an artist's words."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+bpy = pytest.importorskip("bpy")
+pytestmark = pytest.mark.blender
+
+from blender_helpers import (evaluated_colours, evaluated_positions, make_igniter,  # noqa: E402
+                             make_sheet, make_table, point_attribute, setup_bake)
+
+FRAMES = 24
+
+
+def _quick_scene(tmp_path, name="Sheet", z=0.75, location=(0.0, 0.0, 0.0)):
+    """A saved file with a 0.2 m sheet (small settings, so the test is quick) on a table."""
+    bpy.ops.wm.save_as_mainfile(filepath=str(tmp_path / "shot.blend"))
+    scene = bpy.context.scene
+    scene.frame_start, scene.frame_end = 1, FRAMES
+    table = bpy.data.objects.get("Cube") or make_table(0.75)
+    sheet = make_sheet(name, z=z, location=location)
+    sheet.thinburn.cells = 16
+    sheet.thinburn.threads = 1
+    return table, sheet
+
+
+def test_quick_burn_is_in_the_object_menu_beside_quick_smoke(addon):
+    menu = bpy.types.VIEW3D_MT_object_quick_effects
+    assert addon.quick._menu in menu._dyn_ui_initialize()
+
+
+def _select(*objects):
+    for o in bpy.context.scene.objects:
+        o.select_set(o in objects)
+    bpy.context.view_layer.objects.active = objects[0]
+
+
+def test_quick_burn_lights_the_point_nearest_the_cursor_floors_bakes_and_plays(addon, tmp_path):
+    table, sheet = _quick_scene(tmp_path)
+    bpy.context.scene.cursor.location = (0.3, 0.3, 1.0)  # beyond the (+x, +y) corner
+    bpy.context.scene.frame_set(9)
+    _select(sheet)
+    assert bpy.ops.thinburn.quick_burn() == {"FINISHED"}
+    s = sheet.thinburn
+    assert s.enabled and (s.frame_start, s.frame_end) == (1, FRAMES)
+    igniters = list(s.igniter_collection.objects)
+    assert len(igniters) == 1
+    np.testing.assert_allclose(igniters[0].location, (0.1, 0.1, 0.75), atol=1e-6)
+    anim = igniters[0].animation_data  # Strength is keyframed, as igniters are
+    assert anim is not None and anim.action is not None
+    assert s.floor_mode == "OBJECT" and s.floor_object == table  # it lies on the table
+    assert s.cache_dir.startswith("//")  # beside the .blend, relative
+    assert (tmp_path / "thinburn_cache").is_dir()
+    # Baked: the corner under the cursor catches first, and it plays from the first frame.
+    ignite = point_attribute(sheet, "thinburn_ignite_time")
+    assert ignite[-1] == ignite.min() < ignite[0]
+    assert bpy.context.scene.frame_current == 1
+    rest = evaluated_positions(sheet, 1)
+    assert np.abs(evaluated_positions(sheet, FRAMES) - rest).max() > 1e-4  # the sheet moves
+    brightness = [evaluated_colours(sheet, f)[:, :3].sum(axis=1).mean() for f in (1, 12, FRAMES)]
+    assert brightness[0] > brightness[1] > brightness[2]  # char spreads frame after frame
+    z = evaluated_positions(sheet, FRAMES)[:, 2]
+    assert z.min() >= 0.75  # never into the table
+
+
+def test_quick_burn_in_edit_mode_lights_the_selected_vertices(addon, tmp_path):
+    _, sheet = _quick_scene(tmp_path)
+    bpy.context.scene.cursor.location = (0.3, 0.3, 1.0)  # the cursor is not used
+    _select(sheet)
+    bpy.ops.object.mode_set(mode="EDIT")
+    bpy.ops.mesh.select_all(action="DESELECT")
+    import bmesh
+    bm = bmesh.from_edit_mesh(sheet.data)
+    bm.verts.ensure_lookup_table()
+    bm.verts[0].select = True  # the (-x, -y) corner
+    bmesh.update_edit_mesh(sheet.data)
+    assert bpy.ops.thinburn.quick_burn() == {"FINISHED"}
+    assert sheet.mode == "OBJECT"
+    (igniter,) = sheet.thinburn.igniter_collection.objects
+    np.testing.assert_allclose(igniter.location, (-0.1, -0.1, 0.75), atol=1e-6)
+    ignite = point_attribute(sheet, "thinburn_ignite_time")
+    assert ignite[0] == ignite.min() < ignite[-1]
+
+
+def test_quick_burn_again_moves_the_fire_and_keeps_a_floor_already_set(addon, tmp_path):
+    _, sheet = _quick_scene(tmp_path, z=0.9)  # above the table: nothing under it to lie on
+    bpy.context.scene.frame_end = 3
+    _select(sheet)
+    bpy.context.scene.cursor.location = (0.1, 0.1, 0.9)
+    assert bpy.ops.thinburn.quick_burn() == {"FINISHED"}
+    assert sheet.thinburn.floor_mode == "NONE"
+    bpy.context.scene.cursor.location = (-0.1, -0.1, 0.9)
+    assert bpy.ops.thinburn.quick_burn() == {"FINISHED"}
+    (igniter,) = sheet.thinburn.igniter_collection.objects  # the first one went
+    np.testing.assert_allclose(igniter.location, (-0.1, -0.1, 0.9), atol=1e-6)
+
+
+def _undo():
+    with bpy.context.temp_override(window=bpy.context.window_manager.windows[0]):
+        bpy.ops.ed.undo()
+
+
+def test_undo_takes_quick_burn_back(addon, tmp_path):
+    _, sheet = _quick_scene(tmp_path)
+    bpy.context.scene.frame_end = 4
+    _select(sheet)
+    collections = set(bpy.data.collections.keys())
+    objects = set(bpy.data.objects.keys())
+    bpy.ops.ed.undo_push(message="before Quick Burn")
+    # As from a menu: the operator pushes its own undo step ('undo' is bpy.ops' second argument).
+    with bpy.context.temp_override(window=bpy.context.window_manager.windows[0]):
+        assert bpy.ops.thinburn.quick_burn("EXEC_DEFAULT", True) == {"FINISHED"}
+    assert bpy.data.objects["Sheet"].modifiers and set(bpy.data.objects.keys()) > objects
+    _undo()
+    sheet = bpy.data.objects["Sheet"]  # undo reloads the data: fetch it again
+    assert not sheet.thinburn.enabled
+    assert not sheet.modifiers
+    assert sheet.thinburn.igniter_collection is None and sheet.thinburn.floor_mode == "NONE"
+    assert set(bpy.data.objects.keys()) == objects
+    assert set(bpy.data.collections.keys()) == collections
+    assert "thinburn_ignite_time" not in sheet.data.attributes
+
+
+def test_bake_all_bakes_every_enabled_sheet_with_progress(addon, tmp_path, capfd):
+    a = make_sheet("A", location=(0.0, 0.0, 0.0))
+    b = make_sheet("B", location=(1.0, 0.0, 0.0))
+    off = make_sheet("Off", location=(2.0, 0.0, 0.0))
+    for sheet in (a, b):
+        setup_bake(sheet, frames=4, cells=16, cache_dir=tmp_path)
+        make_igniter(sheet, (sheet.location.x, 0.0, 0.5), name=f"Ig {sheet.name}")
+    setup_bake(off, frames=4, cells=16, cache_dir=tmp_path).enabled = False
+    assert bpy.ops.thinburn.bake_all() == {"FINISHED"}
+    assert a.modifiers.get("ThinBurn Cache") and b.modifiers.get("ThinBurn Cache")
+    assert not off.modifiers
+    err = capfd.readouterr().err
+    assert "ThinBurn: 'A' frame" in err and "ThinBurn: 'B' frame" in err
+
+
+def test_bake_all_goes_on_past_a_sheet_that_cannot_bake_and_names_it(addon, tmp_path):
+    good = make_sheet("Good")
+    setup_bake(good, frames=3, cells=16, cache_dir=tmp_path)
+    make_igniter(good, (0.0, 0.0, 0.5))
+    bad = make_sheet("Bad", location=(1.0, 0.0, 0.0))
+    setup_bake(bad, frames=3, cells=16, cache_dir=tmp_path)  # no igniters
+    with pytest.raises(RuntimeError) as info:
+        bpy.ops.thinburn.bake_all()
+    assert "'Bad': no igniters" in str(info.value)
+    assert good.modifiers.get("ThinBurn Cache") and not bad.modifiers
+
+
+def test_bake_all_with_nothing_enabled_says_what_to_do(addon):
+    make_sheet()
+    with pytest.raises(RuntimeError, match="has ThinBurn enabled"):
+        bpy.ops.thinburn.bake_all()
