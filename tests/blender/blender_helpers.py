@@ -124,3 +124,31 @@ def point_attribute(obj, name):
     values = np.empty(len(attr.data), dtype=np.float32)
     attr.data.foreach_get("value", values)
     return values
+
+
+# --- the modal operator without a window ------------------------------------------------------
+def modal_harness(addon, job, queue=()):
+    """The modal bake operator's methods on a stand-in instance (no window in bpy-as-a-module):
+    ``send(event type)`` returns what modal() returns; ``queue``: sheets to bake after ``job``."""
+    import bpy
+    from types import SimpleNamespace
+    op_cls = addon.operators.THINBURN_OT_bake
+    reports, status = [], []
+    op = SimpleNamespace(_job=job, _timer=None, _status_bar=False, _queue=list(queue),
+                         _count=1 + len(queue),
+                         report=lambda kind, text: reports.append((kind, text)))
+    op._end = lambda ctx: op_cls._end(op, ctx)
+    ctx = SimpleNamespace(window_manager=bpy.context.window_manager, scene=bpy.context.scene,
+                          view_layer=bpy.context.view_layer,
+                          workspace=SimpleNamespace(status_text_set=status.append),
+                          screen=SimpleNamespace(areas=[]))
+    addon.operators._running[ctx.scene.name] = job
+
+    def send(kind):
+        return op_cls.modal(op, ctx, SimpleNamespace(type=kind, value="PRESS"))
+    return send, reports, status
+
+
+def worker_busy(job) -> bool:
+    """The bake's worker still runs or has results not yet taken."""
+    return job.worker.is_alive() or not job.worker.results.empty()

@@ -10,7 +10,8 @@ bpy = pytest.importorskip("bpy")
 pytestmark = pytest.mark.blender
 
 from blender_helpers import (evaluated_colours, evaluated_positions, make_igniter, make_sheet,  # noqa: E402
-                             make_table, point_attribute, setup_bake)
+                             make_table, modal_harness, point_attribute, setup_bake,
+                             worker_busy)
 
 FRAMES = 30
 LIT_FROM = 8
@@ -220,35 +221,12 @@ def test_bad_settings_give_a_clear_report(addon, tmp_path, case, message):
     assert not sheet.modifiers
 
 
-def _modal_harness(addon, job):
-    """The modal operator's methods on a stand-in instance (no window in bpy-as-a-module)."""
-    from types import SimpleNamespace
-    op_cls = addon.operators.THINBURN_OT_bake
-    reports, status = [], []
-    op = SimpleNamespace(_job=job, _timer=None, _status_bar=False,
-                         report=lambda kind, text: reports.append((kind, text)))
-    op._end = lambda ctx: op_cls._end(op, ctx)
-    ctx = SimpleNamespace(window_manager=bpy.context.window_manager, scene=bpy.context.scene,
-                          workspace=SimpleNamespace(status_text_set=status.append),
-                          screen=SimpleNamespace(areas=[]))
-    addon.operators._running[ctx.scene.name] = job
-
-    def send(kind):
-        return op_cls.modal(op, ctx, SimpleNamespace(type=kind, value="PRESS"))
-    return send, reports, status
-
-
-def _worker_busy(job) -> bool:
-    """The bake's worker still runs or has results not yet taken."""
-    return job.worker.is_alive() or not job.worker.results.empty()
-
-
 def test_modal_bake_runs_on_timer_events_and_esc_cancels(addon, baked, tmp_path):
     path = tmp_path / "cache" / "Sheet.pc2"
     before = path.read_bytes()
     before_ignite = point_attribute(baked, "thinburn_ignite_time").copy()
     bpy.data.objects["Igniter"].location = (0.1, 0.1, 0.5)
-    send, reports, status = _modal_harness(addon, addon.job.BakeJob(bpy.context, baked))
+    send, reports, status = modal_harness(addon, addon.job.BakeJob(bpy.context, baked))
     assert send("MOUSEMOVE") == {"PASS_THROUGH"}
     for _ in range(3):
         assert send("TIMER") == {"RUNNING_MODAL"}
@@ -260,11 +238,11 @@ def test_modal_bake_runs_on_timer_events_and_esc_cancels(addon, baked, tmp_path)
     assert addon.operators.running_job(bpy.context.scene) is None
 
     job = addon.job.BakeJob(bpy.context, baked)
-    send, reports, status = _modal_harness(addon, job)
+    send, reports, status = modal_harness(addon, job)
     # Bounded by the bake itself, not by a clock a loaded machine outruns: the loop ends when the
     # job finishes or its worker is gone with nothing left to hand over.
     try:
-        while (result := send("TIMER")) == {"RUNNING_MODAL"} and _worker_busy(job):
+        while (result := send("TIMER")) == {"RUNNING_MODAL"} and worker_busy(job):
             time.sleep(0.001)  # timer events come every 50 ms in Blender
     finally:
         if not job.finished:
@@ -294,7 +272,7 @@ def test_deleting_an_igniter_mid_bake_stops_cleanly(addon, baked, tmp_path, monk
     # by a count or a clock that a loaded machine outruns.
     try:
         with pytest.raises(addon.inputs.BakeError, match="'Igniter' was deleted"):
-            while not job.finished and _worker_busy(job):
+            while not job.finished and worker_busy(job):
                 job.tick()
                 time.sleep(0.001)
     finally:

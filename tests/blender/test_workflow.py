@@ -9,7 +9,8 @@ bpy = pytest.importorskip("bpy")
 pytestmark = pytest.mark.blender
 
 from blender_helpers import (evaluated_colours, evaluated_positions, make_igniter,  # noqa: E402
-                             make_sheet, make_table, point_attribute, setup_bake)
+                             make_sheet, make_table, modal_harness, point_attribute, setup_bake,
+                             worker_busy)
 
 FRAMES = 24
 
@@ -136,6 +137,31 @@ def test_bake_all_bakes_every_enabled_sheet_with_progress(addon, tmp_path, capfd
     assert not off.modifiers
     err = capfd.readouterr().err
     assert "ThinBurn: 'A' frame" in err and "ThinBurn: 'B' frame" in err
+
+
+def test_bake_all_from_the_ui_bakes_one_sheet_after_another(addon, tmp_path):
+    import time
+    sheets = [make_sheet(name, location=(x, 0.0, 0.0)) for name, x in (("A", 0.0), ("B", 1.0))]
+    for sheet in sheets:
+        setup_bake(sheet, frames=4, cells=16, cache_dir=tmp_path)
+        make_igniter(sheet, (sheet.location.x, 0.0, 0.5), name=f"Ig {sheet.name}")
+    send, reports, status = modal_harness(addon, addon.job.BakeJob(bpy.context, sheets[0]),
+                                          queue=["B"])
+    seen = set()
+    try:
+        while (result := send("TIMER")) == {"RUNNING_MODAL"}:
+            job = addon.operators.running_job(bpy.context.scene)
+            seen.add(job.obj_name)
+            if not worker_busy(job):
+                break
+            time.sleep(0.001)
+    finally:
+        addon.operators._running.clear()
+    assert result == {"FINISHED"}, reports
+    assert seen == {"A", "B"}
+    assert all(s.modifiers.get("ThinBurn Cache") for s in sheets)
+    assert [t for _, t in reports if "baked" in t] and len([t for _, t in reports if "baked" in t]) == 2
+    assert any("'B'" in s for s in status if s) and status[-1] is None
 
 
 def test_bake_all_goes_on_past_a_sheet_that_cannot_bake_and_names_it(addon, tmp_path):
