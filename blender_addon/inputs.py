@@ -136,8 +136,17 @@ def dynamics(scene, settings) -> dict:
     return values
 
 
+def blend_stem() -> str:
+    """The open .blend's name without '.blend' ('untitled' while it is not saved): each file's
+    bakes go into a folder of their own, so a Save As never shares (or frees) another's."""
+    if not bpy.data.filepath:
+        return "untitled"
+    return bpy.path.clean_name(os.path.splitext(os.path.basename(bpy.data.filepath))[0])
+
+
 def cache_path(obj, settings) -> tuple:
-    """(path for the modifier as the artist wrote it, absolute path) of the sheet's PC2 file."""
+    """(path for the modifier as the artist wrote it, absolute path) of the sheet's PC2 file:
+    ``<Cache Folder>/<blend name>/<object name>.pc2``."""
     raw = settings.cache_dir.strip()
     if not raw:
         raise BakeError("the cache folder is empty: choose a folder for the bake")
@@ -145,7 +154,8 @@ def cache_path(obj, settings) -> tuple:
         raise BakeError(f"the cache folder '{raw}' is relative to the .blend file, which is not "
                         "saved yet: save the file or choose an absolute folder")
     name = bpy.path.clean_name(obj.name) + ".pc2"
-    folder = bpy.path.abspath(raw)
+    stem = blend_stem()
+    folder = os.path.join(bpy.path.abspath(raw), stem)
     try:
         os.makedirs(folder, exist_ok=True)
     except OSError as exc:
@@ -153,4 +163,4 @@ def cache_path(obj, settings) -> tuple:
     if not os.access(folder, os.W_OK):
         raise BakeError(f"the cache folder '{folder}' is not writable")
     shown = raw if raw.endswith(("/", "\\")) else raw + "/"
-    return shown + name, os.path.join(folder, name)
+    return f"{shown}{stem}/{name}", os.path.join(folder, name)

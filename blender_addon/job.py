@@ -269,6 +269,7 @@ class BakeJob:
         if self.want_particles:
             fire.apply_particles(obj, self.modifier_path, self.particle_frames, start)
         obj.thinburn.baked_file = self.modifier_path
+        materials.record_bake(obj)
         self._restore_frame()
         self.finished = True
         self.elapsed = _time.perf_counter() - self.started

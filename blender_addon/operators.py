@@ -256,10 +256,14 @@ class THINBURN_OT_free_bake(bpy.types.Operator):
     def execute(self, context):
         obj = _sheet(context)
         gone = materials.free_bake(obj)
+        kept = [g for g in gone if g.startswith("kept ")]
+        gone = [g for g in gone if not g.startswith("kept ")]
         if not gone:
             self.report({"INFO"}, f"ThinBurn: '{obj.name}' has no bake to free")
         else:
             self.report({"INFO"}, "ThinBurn: removed " + ", ".join(gone))
+        for text in kept:
+            self.report({"INFO"}, f"ThinBurn: {text}")
         return {"FINISHED"}
 
 
@@ -314,12 +318,25 @@ class THINBURN_OT_add_burn_to_material(bpy.types.Operator):
 CLASSES = CLASSES + (THINBURN_OT_add_burn_to_material,)
 
 
+@bpy.app.handlers.persistent
+def _claim_unsaved_bakes(filepath, *_):
+    """A bake made before the file was first saved belongs to the file it is saved as (so that
+    Free there deletes its cache, and Free in a later Save As copy does not)."""
+    for obj in bpy.data.objects:
+        settings = getattr(obj, "thinburn", None)
+        if settings is not None and len(settings.baked_files) and not settings.baked_blend:
+            settings.baked_blend = filepath
+
+
 def register():
     for cls in CLASSES:
         bpy.utils.register_class(cls)
+    bpy.app.handlers.save_pre.append(_claim_unsaved_bakes)
 
 
 def unregister():
+    if _claim_unsaved_bakes in bpy.app.handlers.save_pre:
+        bpy.app.handlers.save_pre.remove(_claim_unsaved_bakes)
     for job in list(_running.values()):
         job.cancel()
     _running.clear()

@@ -6,8 +6,8 @@ not offered for keyframing, so the UI never suggests an animation the bake would
 """
 import bpy
 import thinburn
-from bpy.props import (BoolProperty, EnumProperty, FloatProperty, IntProperty, PointerProperty,
-                       StringProperty)
+from bpy.props import (BoolProperty, CollectionProperty, EnumProperty, FloatProperty, IntProperty,
+                       PointerProperty, StringProperty)
 
 STATIC = set()  # options=STATIC: not animatable (read once per bake)
 # Blender 4.5+ warns about '//' in path properties that do not declare they accept it.
@@ -100,6 +100,20 @@ def _field_props():
         props[key] = FloatProperty(name=label, description=desc + "; read every frame",
                                    default=value, min=lo, soft_max=hi)
     return props
+
+
+class ThinBurnBakedFile(bpy.types.PropertyGroup):
+    """A file a bake wrote (a path as the modifier has it: '//' stays relative)."""
+
+    path: StringProperty(name="Path", subtype="FILE_PATH", options=RELATIVE_PATH,
+                         description="A cache file the sheet's bake wrote; Free Bake deletes it")
+
+
+class ThinBurnBakedObject(bpy.types.PropertyGroup):
+    """An object a bake made (flames, their light, embers, ash flakes)."""
+
+    object: PointerProperty(name="Object", type=bpy.types.Object,
+                            description="An object the sheet's bake made; Free Bake removes it")
 
 
 class ThinBurnSettings(bpy.types.PropertyGroup):
@@ -213,6 +227,18 @@ class ThinBurnSettings(bpy.types.PropertyGroup):
     baked_file: StringProperty(
         name="Baked File", default="", options=STATIC,
         description="The PC2 file of the current bake (set by the bake, cleared by Free Bake)")
+    # What the bake wrote, so that Free removes all of it after a rename, and the file that made
+    # it, so that Free in a copy made by Save As never deletes the original's cache.
+    baked_files: CollectionProperty(
+        type=ThinBurnBakedFile, name="Baked Files",
+        description="Every cache file the current bake wrote (Free Bake deletes them)")
+    baked_objects: CollectionProperty(
+        type=ThinBurnBakedObject, name="Baked Objects",
+        description="Every object the current bake made (Free Bake removes them)")
+    baked_blend: StringProperty(
+        name="Baked In", default="", options=STATIC,
+        description="The .blend file the current bake was made in: only there does Free Bake "
+                    "delete its cache files (a copy saved under another name keeps them)")
 
     __annotations__.update(_field_props())
 
@@ -229,7 +255,7 @@ class ThinBurnIgniter(bpy.types.PropertyGroup):
         description="Cells within this distance of the igniter catch fire (0: the nearest cell)")
 
 
-CLASSES = (ThinBurnSettings, ThinBurnIgniter)
+CLASSES = (ThinBurnBakedFile, ThinBurnBakedObject, ThinBurnSettings, ThinBurnIgniter)
 
 
 def register():

@@ -95,6 +95,14 @@ def setup_bake(sheet, frames=24, cells=32, cache_dir=None, floor=True):
     return s
 
 
+def cache_file(folder, name="Sheet.pc2"):
+    """Where a bake into the Cache Folder ``folder`` writes ``name``: a folder per .blend
+    ('untitled' while unsaved), so that two files never share a cache."""
+    import bpy
+    stem = Path(bpy.data.filepath).stem if bpy.data.filepath else "untitled"
+    return Path(folder) / stem / name
+
+
 def evaluated_positions(obj, frame):
     """Local vertex positions of the evaluated mesh at a frame (n, 3)."""
     import bpy

@@ -9,7 +9,7 @@ import pytest
 bpy = pytest.importorskip("bpy")
 pytestmark = pytest.mark.blender
 
-from blender_helpers import (evaluated_colours, evaluated_positions, make_igniter, make_sheet,  # noqa: E402
+from blender_helpers import (cache_file, evaluated_colours, evaluated_positions, make_igniter, make_sheet,  # noqa: E402
                              make_table, modal_harness, point_attribute, setup_bake,
                              worker_busy)
 
@@ -29,12 +29,12 @@ def baked(addon, tmp_path):
 
 def test_pc2_file_matches_the_mesh_and_frames(addon, baked, tmp_path):
     cache = addon.cache
-    path = tmp_path / "cache" / "Sheet.pc2"
+    path = cache_file(tmp_path / "cache", "Sheet.pc2")
     head, data = cache.read_pc2(path)
     assert head["points"] == len(baked.data.vertices) == 81
     assert head["samples"] == FRAMES
     assert head["start_frame"] == 1.0 and head["sample_rate"] == 1.0 and head["version"] == 1
-    assert not (tmp_path / "cache" / "Sheet.pc2.partial").exists()
+    assert not (cache_file(tmp_path / "cache", "Sheet.pc2.partial")).exists()
     rest = np.array([v.co for v in baked.data.vertices], dtype=np.float32)
     np.testing.assert_allclose(data[0], rest, atol=1e-6)  # the first frame is the rest mesh
 
@@ -43,9 +43,9 @@ def test_modifier_plays_the_cache(addon, baked, tmp_path):
     md = baked.modifiers[0]
     assert md.name == "ThinBurn Cache" and md.type == "MESH_CACHE"
     assert md.cache_format == "PC2" and md.frame_start == 1.0
-    assert bpy.path.abspath(md.filepath) == str(tmp_path / "cache" / "Sheet.pc2")
+    assert bpy.path.abspath(md.filepath) == str(cache_file(tmp_path / "cache", "Sheet.pc2"))
     assert baked.modifiers[1].name == "ThinBurn Burn" and baked.modifiers[1].type == "NODES"
-    _, data = addon.cache.read_pc2(tmp_path / "cache" / "Sheet.pc2")
+    _, data = addon.cache.read_pc2(cache_file(tmp_path / "cache", "Sheet.pc2"))
     for frame in (1, 15, FRAMES):
         np.testing.assert_allclose(evaluated_positions(baked, frame), data[frame - 1], atol=1e-6)
 
@@ -95,7 +95,7 @@ def test_sheet_moves_once_the_core_crumples(addon, baked, tmp_path):
 
 
 def test_cancel_keeps_the_previous_bake(addon, baked, tmp_path):
-    path = tmp_path / "cache" / "Sheet.pc2"
+    path = cache_file(tmp_path / "cache", "Sheet.pc2")
     before_file = path.read_bytes()
     before_ignite = point_attribute(baked, "thinburn_ignite_time").copy()
     bpy.context.scene.frame_set(5)
@@ -106,7 +106,7 @@ def test_cancel_keeps_the_previous_bake(addon, baked, tmp_path):
         job.tick(budget_s=0.05)
     job.cancel()
     assert path.read_bytes() == before_file
-    assert not (tmp_path / "cache" / "Sheet.pc2.partial").exists()
+    assert not (cache_file(tmp_path / "cache", "Sheet.pc2.partial")).exists()
     np.testing.assert_array_equal(point_attribute(baked, "thinburn_ignite_time"), before_ignite)
     assert baked.modifiers[0].name == "ThinBurn Cache"
     assert bpy.context.scene.frame_current == 5  # the artist's frame is back
@@ -117,7 +117,7 @@ def test_free_removes_the_bake(addon, baked, tmp_path):
     assert not baked.modifiers
     names = {a.name for a in baked.data.attributes}
     assert not names & {"thinburn_ignite_time", "thinburn_burnout_time", "thinburn_char"}
-    assert not (tmp_path / "cache" / "Sheet.pc2").exists()
+    assert not (cache_file(tmp_path / "cache", "Sheet.pc2")).exists()
     assert not any(slot.material for slot in baked.material_slots)
     assert baked.thinburn.baked_file == ""
 
@@ -129,12 +129,12 @@ def test_bake_survives_save_and_reload(addon, tmp_path):
     setup_bake(sheet, frames=12)  # the default cache folder: //thinburn_cache/
     make_igniter(sheet, (0.0, 0.0, 0.5), lit_from=1)
     assert bpy.ops.thinburn.bake() == {"FINISHED"}
-    assert sheet.modifiers["ThinBurn Cache"].filepath == "//thinburn_cache/Sheet.pc2"
+    assert sheet.modifiers["ThinBurn Cache"].filepath == "//thinburn_cache/scene/Sheet.pc2"
     bpy.ops.wm.save_mainfile()
     expect = evaluated_positions(sheet, 12)
     bpy.ops.wm.open_mainfile(filepath=str(blend))
     sheet = bpy.data.objects["Sheet"]
-    path = tmp_path / "thinburn_cache" / "Sheet.pc2"
+    path = tmp_path / "thinburn_cache" / "scene" / "Sheet.pc2"
     assert path.exists()
     assert bpy.path.abspath(sheet.modifiers["ThinBurn Cache"].filepath) == str(path)
     np.testing.assert_allclose(evaluated_positions(sheet, 12), expect, atol=1e-7)
@@ -222,7 +222,7 @@ def test_bad_settings_give_a_clear_report(addon, tmp_path, case, message):
 
 
 def test_modal_bake_runs_on_timer_events_and_esc_cancels(addon, baked, tmp_path):
-    path = tmp_path / "cache" / "Sheet.pc2"
+    path = cache_file(tmp_path / "cache", "Sheet.pc2")
     before = path.read_bytes()
     before_ignite = point_attribute(baked, "thinburn_ignite_time").copy()
     bpy.data.objects["Igniter"].location = (0.1, 0.1, 0.5)
@@ -262,7 +262,7 @@ def test_deleting_an_igniter_mid_bake_stops_cleanly(addon, baked, tmp_path, monk
     run = addon.worker.CoreWorker.run
     monkeypatch.setattr(addon.worker.CoreWorker, "run",
                         lambda self: (time.sleep(worker_start_s), run(self)))
-    path = tmp_path / "cache" / "Sheet.pc2"
+    path = cache_file(tmp_path / "cache", "Sheet.pc2")
     before = path.read_bytes()
     job = addon.job.BakeJob(bpy.context, baked)
     job.tick()
@@ -279,7 +279,7 @@ def test_deleting_an_igniter_mid_bake_stops_cleanly(addon, baked, tmp_path, monk
         if not job.finished:
             job.cancel()  # a failed check must not leak the open partial file
     assert job.finished and not job.worker.is_alive()
-    assert path.read_bytes() == before and not (tmp_path / "cache" / "Sheet.pc2.partial").exists()
+    assert path.read_bytes() == before and not (cache_file(tmp_path / "cache", "Sheet.pc2.partial")).exists()
 
 
 def test_bake_writes_fire_particles_when_the_core_has_them(addon, tmp_path, monkeypatch):
@@ -297,7 +297,7 @@ def test_bake_writes_fire_particles_when_the_core_has_them(addon, tmp_path, monk
     setup_bake(sheet, frames=6, cache_dir=tmp_path)
     make_igniter(sheet, (0.0, 0.0, 0.5))
     assert bpy.ops.thinburn.bake() == {"FINISHED"}
-    head, data = addon.cache.read_pc2(tmp_path / "Sheet_fire.pc2")
+    head, data = addon.cache.read_pc2(cache_file(tmp_path, "Sheet_fire.pc2"))
     assert head["samples"] == 6 and head["points"] == 4  # 2 slots: positions, then (T, alive, 0)
     np.testing.assert_array_equal(data[:, 2:, 1], [[0, 0], [1, 0], [1, 1], [0, 0], [1, 0], [1, 1]])
     fire = bpy.data.objects["ThinBurn Fire Sheet"]
@@ -314,7 +314,7 @@ def test_floor_object_is_the_top_of_the_table_and_the_sheet_clears_it(addon, tmp
     s.floor_mode, s.floor_object = "OBJECT", table
     bpy.context.view_layer.objects.active = sheet
     assert bpy.ops.thinburn.bake() == {"FINISHED"}
-    _, samples = addon.cache.read_pc2(tmp_path / "Sheet.pc2")
+    _, samples = addon.cache.read_pc2(cache_file(tmp_path, "Sheet.pc2"))
     z = samples[..., 2] + sheet.matrix_world.translation.z
     clearance = addon.inputs.FLOOR_CLEARANCE
     assert z.min() >= 0.75 + clearance - 1e-6  # never in the table's top face

@@ -180,3 +180,90 @@ def test_bake_all_with_nothing_enabled_says_what_to_do(addon):
     make_sheet()
     with pytest.raises(RuntimeError, match="has ThinBurn enabled"):
         bpy.ops.thinburn.bake_all()
+
+
+# --- caches you can trust ------------------------------------------------------------------------
+def _baked_sheet(frames=6):
+    sheet = make_sheet()
+    setup_bake(sheet, frames=frames, cells=16)  # the default folder, //thinburn_cache/
+    make_igniter(sheet, (0.0, 0.0, 0.5), lit_from=1, radius=0.05)
+    bpy.context.view_layer.objects.active = sheet
+    assert bpy.ops.thinburn.bake() == {"FINISHED"}
+    return sheet
+
+
+def _files(folder):
+    return sorted(p.relative_to(folder).as_posix() for p in folder.rglob("*") if p.is_file())
+
+
+def test_save_as_makes_a_file_of_its_own_and_free_there_keeps_the_originals_cache(addon, tmp_path):
+    # Issue #14: //thinburn_cache/<object>.pc2 was shared, and Free in one file deleted the other's.
+    a, b = tmp_path / "a.blend", tmp_path / "b.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(a))
+    sheet = _baked_sheet()
+    cache = tmp_path / "thinburn_cache"
+    made = _files(cache)
+    assert "a/Sheet.pc2" in made and all(f.startswith("a/") for f in made)
+    # Relative paths stay relative: the modifiers and the record.
+    assert sheet.modifiers["ThinBurn Cache"].filepath == "//thinburn_cache/a/Sheet.pc2"
+    assert all(item.path.startswith("//thinburn_cache/a/") for item in sheet.thinburn.baked_files)
+    assert len(sheet.thinburn.baked_files) == len(made)
+    original = (cache / "a" / "Sheet.pc2").read_bytes()
+    bpy.ops.wm.save_mainfile()
+    bpy.ops.wm.save_as_mainfile(filepath=str(b))
+    sheet = bpy.data.objects["Sheet"]
+    bpy.context.view_layer.objects.active = sheet
+    assert bpy.ops.thinburn.free_bake() == {"FINISHED"}
+    assert not sheet.modifiers and "ThinBurn Fire Sheet" not in bpy.data.objects
+    assert _files(cache) == made  # a.blend's cache is all there
+    # A bake in b.blend goes to b's folder; a's bytes do not change.
+    make_igniter(sheet, (0.1, 0.1, 0.5), lit_from=1, radius=0.05, name="Igniter B")
+    assert bpy.ops.thinburn.bake() == {"FINISHED"}
+    assert sheet.modifiers["ThinBurn Cache"].filepath == "//thinburn_cache/b/Sheet.pc2"
+    assert (cache / "a" / "Sheet.pc2").read_bytes() == original
+    bpy.ops.wm.save_mainfile()
+    # Back in a.blend: it still plays its cache, and Free there deletes exactly its files.
+    bpy.ops.wm.open_mainfile(filepath=str(a))
+    sheet = bpy.data.objects["Sheet"]
+    _, data = addon.cache.read_pc2(cache / "a" / "Sheet.pc2")
+    np.testing.assert_allclose(evaluated_positions(sheet, 6), data[5], atol=1e-6)
+    bpy.context.view_layer.objects.active = sheet
+    assert bpy.ops.thinburn.free_bake() == {"FINISHED"}
+    assert not [f for f in _files(cache) if f.startswith("a/")]
+    assert "b/Sheet.pc2" in _files(cache)
+
+
+def test_a_bake_made_before_the_first_save_belongs_to_the_file_it_is_saved_as(addon, tmp_path):
+    sheet = make_sheet()
+    setup_bake(sheet, frames=4, cells=16, cache_dir=tmp_path / "cache")
+    make_igniter(sheet, (0.0, 0.0, 0.5), lit_from=1)
+    assert bpy.ops.thinburn.bake() == {"FINISHED"}
+    assert (tmp_path / "cache" / "untitled" / "Sheet.pc2").exists()
+    bpy.ops.wm.save_as_mainfile(filepath=str(tmp_path / "a.blend"))
+    bpy.ops.wm.save_as_mainfile(filepath=str(tmp_path / "b.blend"))
+    bpy.context.view_layer.objects.active = bpy.data.objects["Sheet"]
+    assert bpy.ops.thinburn.free_bake() == {"FINISHED"}
+    assert (tmp_path / "cache" / "untitled" / "Sheet.pc2").exists()  # b is a copy: kept
+    bpy.ops.wm.open_mainfile(filepath=str(tmp_path / "a.blend"))
+    bpy.context.view_layer.objects.active = bpy.data.objects["Sheet"]
+    assert bpy.ops.thinburn.free_bake() == {"FINISHED"}
+    assert not (tmp_path / "cache" / "untitled" / "Sheet.pc2").exists()
+
+
+def test_free_after_a_rename_removes_every_file_and_object_the_bakes_made(addon, tmp_path):
+    # Issue #14: Free after a rename left the fire object and its file behind.
+    bpy.ops.wm.save_as_mainfile(filepath=str(tmp_path / "shot.blend"))
+    sheet = _baked_sheet()
+    cache = tmp_path / "thinburn_cache"
+    made = [o.name for o in bpy.data.objects if o.name.startswith("ThinBurn ")]
+    assert "ThinBurn Fire Sheet" in made and "shot/Sheet_fire.pc2" in _files(cache)
+    sheet.name = "Paper"
+    assert bpy.ops.thinburn.bake() == {"FINISHED"}  # baked again under the new name
+    # The old name's objects went with the new bake; its files wait for Free.
+    assert not [n for n in made if n in bpy.data.objects]
+    assert "ThinBurn Fire Paper" in bpy.data.objects and "shot/Sheet.pc2" in _files(cache)
+    sheet.name = "Letter"  # and renamed once more, without a bake
+    assert bpy.ops.thinburn.free_bake() == {"FINISHED"}
+    assert _files(cache) == []
+    assert not [o.name for o in bpy.data.objects if o.name.startswith("ThinBurn ")]
+    assert not sheet.modifiers and len(sheet.thinburn.baked_files) == 0
