@@ -120,7 +120,9 @@ class BakeJob:
         self.started = _time.perf_counter()
         self.elapsed = 0.0
         self.message = ""
-        self.warnings = []  # what the bake ignores, in an artist's words (the report shows them)
+        # What the bake ignores, in an artist's words (the report shows them).
+        self.warnings = inputs.wind_warnings(context.view_layer)
+        self.moved_at = None  # the first frame where the sheet's transform differs from Start
         self.worker = CoreWorker(lambda: thinburn.Simulation(world, tris, **kwargs), self.dt,
                                  self.want_particles)
         self.worker.start()
@@ -194,9 +196,13 @@ class BakeJob:
         while self.next_task < n and self.next_task < self.frames_done + LOOKAHEAD:
             need = min(self.next_task + 1, n - 1)
             while self.next_sample <= need:
+                frame = self.frames[self.next_sample]
                 self.samples[self.next_sample] = inputs.sample_frame(
-                    self.scene, self.frames[self.next_sample], self.obj_name, self.igniters,
-                    self.winds)
+                    self.scene, frame, self.obj_name, self.igniters, self.winds)
+                if self.moved_at is None and not np.allclose(
+                        np.array(bpy.data.objects[self.obj_name].matrix_world), self.matrix,
+                        rtol=0.0, atol=1e-6):
+                    self.moved_at = frame
                 self.next_sample += 1
             self.worker.tasks.put(self._task(self.next_task))
             self.samples.pop(self.next_task - 1, None)
@@ -278,3 +284,7 @@ class BakeJob:
                         f"in {self.elapsed:.1f} s; {ignited} of {self.n_vertices} vertices caught fire")
         if ignited == 0:
             self.message += " (no lit igniter touched the sheet)"
+        if self.moved_at is not None:
+            what = (inputs.transform_animation(obj)
+                    or f"its transform at frame {self.moved_at} is not the one at {self.frames[0]}")
+            self.warnings.append(inputs.moved_warning(self.obj_name, what, self.frames[0]))

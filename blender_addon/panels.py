@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import bpy
 
-from . import job, materials
+from . import inputs, job, materials
 from .operators import running_job
 from .properties import DYNAMIC_PARAMS, MATERIAL_FIELDS, MODEL_PARAMS
 
@@ -47,6 +47,26 @@ class PHYSICS_PT_thinburn(ThinBurnPhysicsPanel, bpy.types.Panel):
         layout.prop(settings, "igniter_collection")
         layout.prop(settings, "wind_scale")
         layout.operator("thinburn.quick_burn", icon="LIGHT_SUN")
+        if settings.enabled:
+            for text in sheet_warnings(context, context.object):
+                warning(layout, text)
+
+
+def sheet_warnings(context, obj) -> list:
+    """What the bake will ignore, as the panel says it (the bake's report says it too)."""
+    out = []
+    moving = inputs.transform_animation(obj)
+    if moving:
+        out.append(inputs.moved_warning(obj.name, moving, obj.thinburn.frame_start))
+    return out + inputs.wind_warnings(context.view_layer)
+
+
+def warning(layout, text: str, width: int = 52) -> None:
+    """A warning in the panel, wrapped over as many lines as it needs."""
+    import textwrap
+    col = layout.column(align=True)
+    for i, line in enumerate(textwrap.wrap(text, width)):
+        col.label(text=line, icon="ERROR" if i == 0 else "BLANK1")
 
 
 class PHYSICS_PT_thinburn_motion(ThinBurnPhysicsPanel, bpy.types.Panel):

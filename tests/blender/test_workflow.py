@@ -267,3 +267,31 @@ def test_free_after_a_rename_removes_every_file_and_object_the_bakes_made(addon,
     assert _files(cache) == []
     assert not [o.name for o in bpy.data.objects if o.name.startswith("ThinBurn ")]
     assert not sheet.modifiers and len(sheet.thinburn.baked_files) == 0
+
+
+# --- warnings for what the bake ignores --------------------------------------------------------
+def test_the_bake_report_warns_when_the_sheet_moves_and_when_wind_settings_are_ignored(
+        addon, tmp_path, capfd):
+    sheet = make_sheet()
+    setup_bake(sheet, frames=6, cells=16, cache_dir=tmp_path)
+    make_igniter(sheet, (0.0, 0.0, 0.5))
+    still = addon.operators.bake_now(bpy.context, sheet)
+    assert still.warnings == []  # nothing ignored, nothing said
+    sheet.keyframe_insert("location", frame=1)
+    sheet.location.x = 0.5
+    sheet.keyframe_insert("location", frame=6)  # a letter thrown across the table
+    bpy.ops.object.effector_add(type="WIND")
+    bpy.context.active_object.field.noise = 1.0
+    bpy.context.view_layer.objects.active = sheet
+    capfd.readouterr()
+    assert bpy.ops.thinburn.bake() == {"FINISHED"}
+    out = capfd.readouterr().out
+    assert "Warning: ThinBurn: 'Sheet' moves in the scene (its location (animated))" in out
+    assert "it reads where the sheet is at frame 1 only" in out
+    assert "Warning: ThinBurn: Wind 'Wind': its Noise (1) is ignored" in out
+    # The same from the command line: headless prints the warnings with the bake's message.
+    import importlib
+    import io
+    headless = importlib.import_module(f"{addon.__name__}.headless")
+    text = headless.bake_object(sheet, stream=io.StringIO())
+    assert "ThinBurn: warning: 'Sheet' moves in the scene" in text
