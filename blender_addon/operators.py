@@ -268,7 +268,7 @@ class THINBURN_OT_free_bake(bpy.types.Operator):
 
 
 class THINBURN_OT_load_preset(bpy.types.Operator):
-    """Reload the material preset's values into the Material fields"""
+    """Reload the preset's values into Advanced > Burns Like"""
 
     bl_idname = "thinburn.load_preset"
     bl_label = "Reset to Preset"

@@ -172,11 +172,11 @@ class PHYSICS_PT_thinburn_advanced(ThinBurnPhysicsPanel, bpy.types.Panel):
         layout.prop(settings, "front")
         layout.prop(settings, "seed")
         layout.prop(settings, "threads")
-        box = layout.column(heading="Material")
+        box = layout.column(heading="Burns Like")
         for field in MATERIAL_FIELDS:
             box.prop(settings, "mat_" + field)
         layout.operator("thinburn.load_preset", icon="LOOP_BACK")
-        col = layout.column(heading="Model")
+        col = layout.column(heading="Spread")
         for key in MODEL_PARAMS:
             col.prop(settings, key)
 

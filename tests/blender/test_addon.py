@@ -302,3 +302,23 @@ def test_the_panel_warns_of_an_animated_sheet_and_of_wind_settings_it_ignores(ad
     assert "Keep the sheet still" in text
     assert "Wind 'Breeze': its Falloff (Sphere, power 1.5), Noise (2) are ignored" in text
     assert "'Gusts' (a Turbulence field) does not act on ThinBurn sheets" in text
+
+
+def test_settings_speak_an_artists_words_and_keep_the_papers_in_tooltips(addon):
+    # Issue #14: "Material" meant a physics preset, "Strength" was on/off, "Slope Factor",
+    # "Max Drive". The identifiers stay (saved files and keyframes use them); the labels change.
+    props = addon.properties.ThinBurnSettings.bl_rna.properties
+    igniter = addon.properties.ThinBurnIgniter.bl_rna.properties
+    expect = {
+        (props, "material"): ("Burns Like", "Table 1"),
+        (props, "mat_Cv"): ("Slows on Curves", "slope factor Cv"),
+        (props, "max_drive"): ("Climb and Wind Limit", "max_drive"),
+        (props, "v_floor"): ("Slowest Spread", "v_floor"),
+        (props, "cells"): ("Fire Detail", "fire cells"),
+        (props, "lattice"): ("Motion Detail", "lattice"),
+        (props, "mat_Cp"): ("Shrink When Burning", "Cp"),
+        (igniter, "strength"): ("Lit", "strength"),
+    }
+    for (group, ident), (label, paper) in expect.items():
+        assert group[ident].name == label, ident
+        assert paper in group[ident].description, ident
