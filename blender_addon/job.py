@@ -96,7 +96,8 @@ class BakeJob:
         try:
             world, tris, self.matrix = inputs.sheet_geometry(obj)
             kwargs = self._simulation_kwargs(obj, settings)
-            _check_floor(obj, world, kwargs.get("floor"), settings)
+            self.floor = kwargs.get("floor")  # where the ash flakes land, too
+            _check_floor(obj, world, self.floor, settings)
             self.modifier_path, self.abs_path = inputs.cache_path(obj, settings)
             self.writer = cache.PC2Writer(self.abs_path, len(world), start_frame=float(self.frames[0]))
         except OSError as exc:
@@ -271,7 +272,7 @@ class BakeJob:
         start = float(self.frames[0])
         ignite = cache.seconds_to_frames(ignite_s, start, self.fps)
         burnout = cache.seconds_to_frames(burnout_s, start, self.fps)
-        materials.apply_bake(obj, self.modifier_path, start, ignite, burnout)
+        materials.apply_bake(obj, self.modifier_path, start, ignite, burnout, self.floor)
         if self.want_particles:
             fire.apply_particles(obj, self.modifier_path, self.particle_frames, start)
         obj.thinburn.baked_file = self.modifier_path

@@ -374,8 +374,9 @@ def char_material(obj):
     return mat
 
 
-def apply_bake(obj, pc2_path: str, frame_start: float, ignite, burnout) -> None:
-    """Hook a finished bake onto the sheet: attributes, modifiers, and a material if it has none."""
+def apply_bake(obj, pc2_path: str, frame_start: float, ignite, burnout, floor=None) -> None:
+    """Hook a finished bake onto the sheet: attributes, modifiers, and a material if it has none;
+    ash flakes land on ``floor`` (the bake's world height, None: they keep falling)."""
     mesh = obj.data
     cache.write_point_attribute(mesh, ATTR_IGNITE, ignite)
     cache.write_point_attribute(mesh, ATTR_BURNOUT, burnout)
@@ -406,12 +407,6 @@ def apply_bake(obj, pc2_path: str, frame_start: float, ignite, burnout) -> None:
     else:
         burn_materials(obj)  # the sheet's own materials char, glow and burn through too
     sync_burnt(obj)
-    floor = None
-    settings = getattr(obj, "thinburn", None)
-    if settings is not None and settings.floor_mode == "HEIGHT":
-        floor = float(settings.floor_height)
-    elif settings is not None and settings.floor_mode == "OBJECT" and settings.floor_object is not None:
-        floor = float(settings.floor_object.matrix_world.translation.z)
     apply_flakes(obj, pc2_path, frame_start, burnout, floor)
     obj.update_tag()
     mesh.update()

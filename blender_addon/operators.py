@@ -1,8 +1,10 @@
-"""Bake and Free Bake.
+"""Bake, Bake All and Free Bake.
 
-``bpy.ops.thinburn.bake()`` called from a script (or in background mode) bakes to the end
-before it returns. Invoked from the UI it is modal: a timer drives the bake, the status bar
-shows the frame and a progress bar, Esc cancels and leaves the previous bake untouched.
+``bpy.ops.thinburn.bake()`` (the active mesh) and ``bpy.ops.thinburn.bake_all()`` (every
+enabled sheet of the scene) called from a script (or in background mode) bake to the end
+before they return. Invoked from the UI they are modal: a timer drives the bake, the status
+bar shows the sheet, the frame and a progress bar, Esc cancels and leaves the previous bake
+untouched. ``bake_now`` is the bake-to-the-end that Quick Burn and headless bakes share.
 """
 from __future__ import annotations
 

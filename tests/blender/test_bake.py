@@ -344,3 +344,19 @@ def test_a_background_bake_prints_its_progress(addon, tmp_path, capfd):
     assert bpy.ops.thinburn.bake() == {"FINISHED"}
     lines = [l for l in capfd.readouterr().err.splitlines() if l.startswith("ThinBurn: 'Sheet' frame")]
     assert lines and "ETA" in lines[0] and "%" in lines[0]
+
+
+def test_ash_flakes_land_on_the_top_of_the_floor_object(addon, tmp_path, monkeypatch):
+    # They landed at the Floor object's origin, inside a box table (the bake's floor is its top).
+    landed = []
+    real = addon.materials.apply_flakes
+    monkeypatch.setattr(addon.materials, "apply_flakes",
+                        lambda *args: (landed.append(args[-1]), real(*args)))
+    table = make_table(0.75)
+    sheet = make_sheet(z=0.75)
+    make_igniter(sheet, (0.0, 0.0, 0.75), lit_from=1)
+    s = setup_bake(sheet, frames=3, cells=16, cache_dir=tmp_path, floor=False)
+    s.floor_mode, s.floor_object = "OBJECT", table
+    bpy.context.view_layer.objects.active = sheet
+    assert bpy.ops.thinburn.bake() == {"FINISHED"}
+    assert landed == [pytest.approx(0.75 + addon.inputs.FLOOR_CLEARANCE, abs=1e-6)]
