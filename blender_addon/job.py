@@ -123,6 +123,14 @@ class BakeJob:
         self.message = ""
         # What the bake ignores, in an artist's words (the report shows them).
         self.warnings = inputs.wind_warnings(context.view_layer)
+        if self.n_vertices < (settings.cells / 4) ** 2:
+            # The char, the glow and the motion live on the vertices (the fire's cells do not
+            # show between them), and the bake reads the mesh before its modifiers.
+            self.warnings.append(
+                f"'{obj.name}' has {self.n_vertices} vertices for {settings.cells}×"
+                f"{settings.cells} fire cells, so the burn shows only at those points: subdivide "
+                f"the mesh (Edit Mode > Subdivide; about {settings.cells // 2} cuts) for a "
+                "visible fire front")
         self.moved_at = None  # the first frame where the sheet's transform differs from Start
         self.worker = CoreWorker(lambda: thinburn.Simulation(world, tris, **kwargs), self.dt,
                                  self.want_particles)

@@ -182,12 +182,17 @@ class THINBURN_OT_quick_burn(bpy.types.Operator):
             points = ignition_points(obj, cursor, selected_only=edit)
             for note in setup(context, obj, points, scene_range=True, exclude=names):
                 self.report({"INFO"}, f"ThinBurn: {note}")
+            wm = context.window_manager
+            wm.progress_begin(0, 1000)  # the mouse cursor counts while the window waits
             try:
                 job = operators.bake_now(context, obj,
-                                         stream=sys.stderr if bpy.app.background else None)
+                                         stream=sys.stderr if bpy.app.background else None,
+                                         on_frame=lambda j: wm.progress_update(int(1000 * j.progress)))
             except BakeError as exc:
                 self.report({"ERROR"}, f"ThinBurn: {exc}")
                 continue
+            finally:
+                wm.progress_end()
             operators.report_bake(self, job)
             baked += 1
         if not baked:

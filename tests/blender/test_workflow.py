@@ -295,3 +295,13 @@ def test_the_bake_report_warns_when_the_sheet_moves_and_when_wind_settings_are_i
     headless = importlib.import_module(f"{addon.__name__}.headless")
     text = headless.bake_object(sheet, stream=io.StringIO())
     assert "ThinBurn: warning: 'Sheet' moves in the scene" in text
+
+
+def test_a_mesh_too_coarse_for_its_fire_detail_is_told_to_subdivide(addon, tmp_path):
+    sheet = make_sheet(n=3)  # 9 vertices
+    setup_bake(sheet, frames=2, cells=32, cache_dir=tmp_path)
+    make_igniter(sheet, (0.0, 0.0, 0.5))
+    (text,) = addon.operators.bake_now(bpy.context, sheet).warnings
+    assert "'Sheet' has 9 vertices for 32×32 fire cells" in text and "Subdivide" in text
+    sheet.thinburn.cells = 8  # a vertex every 4 cells is fine
+    assert addon.operators.bake_now(bpy.context, sheet).warnings == []
