@@ -22,37 +22,19 @@ import bpy
 
 from . import operators
 from .inputs import BakeError
-from .job import BakeJob, ProgressLines
 
 
-def enabled_sheets(scene) -> list:
-    """The scene's meshes with ThinBurn enabled, by name."""
-    return [o.name for o in scene.objects if o.type == "MESH" and o.thinburn.enabled]
+enabled_sheets = operators.enabled_sheets  # the scene's meshes with ThinBurn enabled, by name
 
 
 def bake_object(obj, stream=sys.stderr, interval: float = 1.0) -> str:
-    """Bake one sheet as the Bake operator does from a script; returns the bake's message.
+    """Bake one sheet as the Bake operator does from a script; returns the bake's message
+    (and a line for each thing the bake ignored).
 
     Raises BakeError with the text the operator would report; the previous bake stays.
     """
-    context = bpy.context
-    scene = context.scene
-    if operators.running_job(scene) is not None:
-        raise BakeError("another ThinBurn bake is running in this scene")
-    job = BakeJob(context, obj)
-    progress = ProgressLines(obj.name, stream, interval)
-    operators._running[scene.name] = job
-    try:
-        job.run(progress=progress)
-    except BakeError:
-        raise
-    except BaseException:
-        job.cancel()  # stop the worker, keep the previous bake
-        raise
-    finally:
-        operators._running.pop(scene.name, None)
-    progress(job, force=True)
-    return job.message
+    job = operators.bake_now(bpy.context, obj, stream=stream, interval=interval)
+    return "\n".join([job.message, *(f"ThinBurn: warning: {w}" for w in job.warnings)])
 
 
 def bake_file(filepath=None, objects=None, save: bool = True, usd=None, stream=sys.stderr,

@@ -99,6 +99,83 @@ def wind_objects(view_layer) -> list:
             if o.field is not None and o.field.type == "WIND"]
 
 
+# --- what the bake ignores, said so ---------------------------------------------------------------
+TRANSFORM_PATHS = {"location", "rotation_euler", "rotation_quaternion", "rotation_axis_angle",
+                   "scale", "delta_location", "delta_rotation_euler", "delta_rotation_quaternion",
+                   "delta_scale"}
+
+
+def _fcurves(anim) -> list:
+    """The F-curves of an object's action (Blender 5's slotted actions, or 4.x's flat ones)."""
+    action = anim.action
+    if action is None:
+        return []
+    if hasattr(action, "fcurves"):
+        return list(action.fcurves)
+    from bpy_extras import anim_utils
+    bag = anim_utils.action_get_channelbag_for_slot(action, anim.action_slot)
+    return [] if bag is None else list(bag.fcurves)
+
+
+def transform_animation(obj):
+    """What animates the object's transform, in the UI's words, or None: keyframes or drivers
+    on its location, rotation or scale, constraints, or the same on a parent."""
+    ob = obj
+    while ob is not None:
+        whose = "its" if ob is obj else f"its parent '{ob.name}''s"
+        anim = ob.animation_data
+        if anim is not None:
+            curves = _fcurves(anim) + list(anim.drivers)
+            paths = sorted({fc.data_path for fc in curves if fc.data_path in TRANSFORM_PATHS
+                            and not fc.mute})
+            if paths:
+                return f"{whose} {', '.join(p.replace('_', ' ') for p in paths)} (animated)"
+        live = [c.name for c in ob.constraints if c.enabled]
+        if live:
+            return f"{whose} constraint{'s' if len(live) > 1 else ''} {', '.join(live)}"
+        ob = ob.parent
+    return None
+
+
+def moved_warning(name: str, what: str, frame) -> str:
+    at = f"at frame {frame} " if frame is not None else ""
+    return (f"'{name}' moves in the scene ({what}), but the bake ignores that: it reads where "
+            f"the sheet is {at}only. Keep the sheet still and animate the igniters, wind, pins "
+            "or floor instead")
+
+
+def wind_warnings(view_layer) -> list:
+    """What the bake ignores of the force fields: a Wind field blows evenly over the sheet
+    along its Z axis (Strength × Wind Scale, read every frame); its shape, falloff, distances
+    and noise, and every other kind of field, are not used."""
+    out = []
+    for ob in view_layer.objects:
+        field = ob.field
+        if field is None or field.type == "NONE":
+            continue
+        if field.type != "WIND":
+            kind = field.type.replace("_", " ").title()
+            out.append(f"'{ob.name}' (a {kind} field) does not act on ThinBurn sheets: only Wind "
+                       "fields blow on them")
+            continue
+        ignored = []
+        if field.shape not in {"PLANE", "POINT"}:
+            ignored.append(f"Shape ({field.shape.title()})")
+        if field.falloff_power > 0.0:
+            ignored.append(f"Falloff ({field.falloff_type.title()}, power {field.falloff_power:g})")
+        if field.use_min_distance:
+            ignored.append("Min Distance")
+        if field.use_max_distance:
+            ignored.append("Max Distance")
+        if field.noise > 0.0:
+            ignored.append(f"Noise ({field.noise:g})")
+        if ignored:
+            out.append(f"Wind '{ob.name}': its {', '.join(ignored)} "
+                       f"{'is' if len(ignored) == 1 else 'are'} ignored: ThinBurn blows the wind "
+                       "evenly over the whole sheet, along the field's Z axis")
+    return out
+
+
 def sample_frame(scene, frame: int, sheet_name: str, igniters: list, winds: list) -> FrameSample:
     """Move the scene to ``frame`` and read the igniters and the wind.
 
@@ -136,8 +213,17 @@ def dynamics(scene, settings) -> dict:
     return values
 
 
+def blend_stem() -> str:
+    """The open .blend's name without '.blend' ('untitled' while it is not saved): each file's
+    bakes go into a folder of their own, so a Save As never shares (or frees) another's."""
+    if not bpy.data.filepath:
+        return "untitled"
+    return bpy.path.clean_name(os.path.splitext(os.path.basename(bpy.data.filepath))[0])
+
+
 def cache_path(obj, settings) -> tuple:
-    """(path for the modifier as the artist wrote it, absolute path) of the sheet's PC2 file."""
+    """(path for the modifier as the artist wrote it, absolute path) of the sheet's PC2 file:
+    ``<Cache Folder>/<blend name>/<object name>.pc2``."""
     raw = settings.cache_dir.strip()
     if not raw:
         raise BakeError("the cache folder is empty: choose a folder for the bake")
@@ -145,7 +231,8 @@ def cache_path(obj, settings) -> tuple:
         raise BakeError(f"the cache folder '{raw}' is relative to the .blend file, which is not "
                         "saved yet: save the file or choose an absolute folder")
     name = bpy.path.clean_name(obj.name) + ".pc2"
-    folder = bpy.path.abspath(raw)
+    stem = blend_stem()
+    folder = os.path.join(bpy.path.abspath(raw), stem)
     try:
         os.makedirs(folder, exist_ok=True)
     except OSError as exc:
@@ -153,4 +240,4 @@ def cache_path(obj, settings) -> tuple:
     if not os.access(folder, os.W_OK):
         raise BakeError(f"the cache folder '{folder}' is not writable")
     shown = raw if raw.endswith(("/", "\\")) else raw + "/"
-    return shown + name, os.path.join(folder, name)
+    return f"{shown}{stem}/{name}", os.path.join(folder, name)

@@ -96,7 +96,8 @@ class BakeJob:
         try:
             world, tris, self.matrix = inputs.sheet_geometry(obj)
             kwargs = self._simulation_kwargs(obj, settings)
-            _check_floor(obj, world, kwargs.get("floor"), settings)
+            self.floor = kwargs.get("floor")  # where the ash flakes land, too
+            _check_floor(obj, world, self.floor, settings)
             self.modifier_path, self.abs_path = inputs.cache_path(obj, settings)
             self.writer = cache.PC2Writer(self.abs_path, len(world), start_frame=float(self.frames[0]))
         except OSError as exc:
@@ -120,6 +121,17 @@ class BakeJob:
         self.started = _time.perf_counter()
         self.elapsed = 0.0
         self.message = ""
+        # What the bake ignores, in an artist's words (the report shows them).
+        self.warnings = inputs.wind_warnings(context.view_layer)
+        if self.n_vertices < (settings.cells / 4) ** 2:
+            # The char, the glow and the motion live on the vertices (the fire's cells do not
+            # show between them), and the bake reads the mesh before its modifiers.
+            self.warnings.append(
+                f"'{obj.name}' has {self.n_vertices} vertices for {settings.cells}×"
+                f"{settings.cells} fire cells, so the burn shows only at those points: subdivide "
+                f"the mesh (Edit Mode > Subdivide; about {settings.cells // 2} cuts) for a "
+                "visible fire front")
+        self.moved_at = None  # the first frame where the sheet's transform differs from Start
         self.worker = CoreWorker(lambda: thinburn.Simulation(world, tris, **kwargs), self.dt,
                                  self.want_particles)
         self.worker.start()
@@ -193,9 +205,13 @@ class BakeJob:
         while self.next_task < n and self.next_task < self.frames_done + LOOKAHEAD:
             need = min(self.next_task + 1, n - 1)
             while self.next_sample <= need:
+                frame = self.frames[self.next_sample]
                 self.samples[self.next_sample] = inputs.sample_frame(
-                    self.scene, self.frames[self.next_sample], self.obj_name, self.igniters,
-                    self.winds)
+                    self.scene, frame, self.obj_name, self.igniters, self.winds)
+                if self.moved_at is None and not np.allclose(
+                        np.array(bpy.data.objects[self.obj_name].matrix_world), self.matrix,
+                        rtol=0.0, atol=1e-6):
+                    self.moved_at = frame
                 self.next_sample += 1
             self.worker.tasks.put(self._task(self.next_task))
             self.samples.pop(self.next_task - 1, None)
@@ -264,10 +280,11 @@ class BakeJob:
         start = float(self.frames[0])
         ignite = cache.seconds_to_frames(ignite_s, start, self.fps)
         burnout = cache.seconds_to_frames(burnout_s, start, self.fps)
-        materials.apply_bake(obj, self.modifier_path, start, ignite, burnout)
+        materials.apply_bake(obj, self.modifier_path, start, ignite, burnout, self.floor)
         if self.want_particles:
             fire.apply_particles(obj, self.modifier_path, self.particle_frames, start)
         obj.thinburn.baked_file = self.modifier_path
+        materials.record_bake(obj)
         self._restore_frame()
         self.finished = True
         self.elapsed = _time.perf_counter() - self.started
@@ -276,3 +293,7 @@ class BakeJob:
                         f"in {self.elapsed:.1f} s; {ignited} of {self.n_vertices} vertices caught fire")
         if ignited == 0:
             self.message += " (no lit igniter touched the sheet)"
+        if self.moved_at is not None:
+            what = (inputs.transform_animation(obj)
+                    or f"its transform at frame {self.moved_at} is not the one at {self.frames[0]}")
+            self.warnings.append(inputs.moved_warning(self.obj_name, what, self.frames[0]))

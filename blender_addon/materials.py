@@ -374,8 +374,9 @@ def char_material(obj):
     return mat
 
 
-def apply_bake(obj, pc2_path: str, frame_start: float, ignite, burnout) -> None:
-    """Hook a finished bake onto the sheet: attributes, modifiers, and a material if it has none."""
+def apply_bake(obj, pc2_path: str, frame_start: float, ignite, burnout, floor=None) -> None:
+    """Hook a finished bake onto the sheet: attributes, modifiers, and a material if it has none;
+    ash flakes land on ``floor`` (the bake's world height, None: they keep falling)."""
     mesh = obj.data
     cache.write_point_attribute(mesh, ATTR_IGNITE, ignite)
     cache.write_point_attribute(mesh, ATTR_BURNOUT, burnout)
@@ -406,26 +407,96 @@ def apply_bake(obj, pc2_path: str, frame_start: float, ignite, burnout) -> None:
     else:
         burn_materials(obj)  # the sheet's own materials char, glow and burn through too
     sync_burnt(obj)
-    floor = None
-    settings = getattr(obj, "thinburn", None)
-    if settings is not None and settings.floor_mode == "HEIGHT":
-        floor = float(settings.floor_height)
-    elif settings is not None and settings.floor_mode == "OBJECT" and settings.floor_object is not None:
-        floor = float(settings.floor_object.matrix_world.translation.z)
     apply_flakes(obj, pc2_path, frame_start, burnout, floor)
     obj.update_tag()
     mesh.update()
 
 
-def free_bake(obj) -> list:
-    """Remove what apply_bake added (and the cache files); returns what went, for the report."""
+# --- what a bake wrote, and whose it is -----------------------------------------------------------
+def _made_objects(obj) -> list:
+    """The objects a bake of the sheet made, found by the names it gives them now."""
+    names = (fire_object_name(obj), light_object_name(obj), ember_object_name(obj),
+             flake_object_name(obj))
+    return [o for o in map(bpy.data.objects.get, names) if o is not None]
+
+
+def _same_file(a: str, b: str) -> bool:
+    return os.path.normcase(os.path.realpath(a)) == os.path.normcase(os.path.realpath(b))
+
+
+def owns_cache(settings) -> bool:
+    """Whether the open .blend made the sheet's recorded cache files: the file the bake ran in
+    (or, if that file is gone, its renamed self). A copy made by Save As does not own them."""
+    made_in, here = settings.baked_blend, bpy.data.filepath
+    if made_in == here or (made_in and here and _same_file(made_in, here)):
+        return True
+    return bool(made_in) and not os.path.exists(made_in)
+
+
+def _delete_files(paths, gone) -> None:
+    for path in sorted(paths):
+        for p in (path, path + ".partial"):
+            if os.path.exists(p):
+                os.remove(p)
+                gone.append("file " + os.path.basename(p))
+
+
+def _remove_object(ob) -> None:
+    mesh = ob.data
+    bpy.data.objects.remove(ob)
+    if mesh is not None and mesh.users == 0 and isinstance(mesh, bpy.types.Mesh):
+        bpy.data.meshes.remove(mesh)
+
+
+def record_bake(obj) -> list:
+    """Store on the sheet what its bake wrote (files as the modifiers have them, the objects it
+    made, the .blend it ran in). Objects an earlier bake made and this one did not (after a
+    rename, say) go now; the files an earlier bake of this .blend wrote stay on the list, and
+    on disk until Free (the saved file may still play them). Returns the objects that went."""
+    settings = obj.thinburn
+    made = _made_objects(obj)
+    written = [md.filepath for o in [obj, *made]
+               if (md := o.modifiers.get(CACHE_MODIFIER)) is not None and md.filepath]
     gone = []
+    for item in settings.baked_objects:
+        if item.object is not None and item.object not in made:
+            gone.append("object " + item.object.name)
+            _remove_object(item.object)
+    if owns_cache(settings):
+        written += [item.path for item in settings.baked_files]
+    files, known = [], set()
+    for f in written:  # the flames and their light share a file
+        if bpy.path.abspath(f) not in known:
+            known.add(bpy.path.abspath(f))
+            files.append(f)
+    settings.baked_files.clear()
+    for f in files:
+        settings.baked_files.add().path = f
+    settings.baked_objects.clear()
+    for o in made:
+        settings.baked_objects.add().object = o
+    settings.baked_blend = bpy.data.filepath
+    return gone
+
+
+def free_bake(obj) -> list:
+    """Remove what apply_bake added, the objects the bake made and (when this .blend made them)
+    its cache files; returns what went, for the report."""
+    gone = []
+    settings = obj.thinburn
     md = obj.modifiers.get(CACHE_MODIFIER)
     paths = set()
-    if obj.thinburn.baked_file:
-        paths.add(bpy.path.abspath(obj.thinburn.baked_file))
+    recorded = len(settings.baked_files) > 0
+    if recorded and owns_cache(settings):
+        paths |= {bpy.path.abspath(item.path) for item in settings.baked_files}
+    elif recorded:
+        gone.append(f"kept the cache files: they belong to "
+                    f"'{os.path.basename(settings.baked_blend) or 'an unsaved file'}', which this "
+                    "file was saved from")
+    elif settings.baked_file:  # a bake from before the record: what its modifiers point at
+        paths.add(bpy.path.abspath(settings.baked_file))
     if md is not None:
-        if md.filepath:
+        if md.filepath and not recorded:
             paths.add(bpy.path.abspath(md.filepath))
         obj.modifiers.remove(md)
         gone.append("modifier " + CACHE_MODIFIER)
@@ -446,25 +517,19 @@ def free_bake(obj) -> list:
                 bpy.data.materials.remove(mat)
             gone.append("material")
             break
-    for name in (fire_object_name(obj), light_object_name(obj), ember_object_name(obj),
-                 flake_object_name(obj)):
-        fire = bpy.data.objects.get(name)
-        if fire is None:
-            continue
+    made = {o.name: o for o in _made_objects(obj)}
+    made.update({i.object.name: i.object for i in settings.baked_objects if i.object is not None})
+    for fire in made.values():
         fmd = fire.modifiers.get(CACHE_MODIFIER)
-        if fmd is not None and fmd.filepath:
+        if fmd is not None and fmd.filepath and not recorded:
             paths.add(bpy.path.abspath(fmd.filepath))
-        mesh = fire.data
-        bpy.data.objects.remove(fire)
-        if mesh is not None and mesh.users == 0:
-            bpy.data.meshes.remove(mesh)
+        _remove_object(fire)
         if "fire particles" not in gone:
             gone.append("fire particles")
-    for path in sorted(paths):
-        for p in (path, path + ".partial"):
-            if os.path.exists(p):
-                os.remove(p)
-                gone.append("file " + os.path.basename(p))
-    obj.thinburn.baked_file = ""
+    _delete_files(paths, gone)
+    settings.baked_file = ""
+    settings.baked_files.clear()
+    settings.baked_objects.clear()
+    settings.baked_blend = ""
     obj.update_tag()
     return gone

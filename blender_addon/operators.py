@@ -1,8 +1,10 @@
-"""Bake and Free Bake.
+"""Bake, Bake All and Free Bake.
 
-``bpy.ops.thinburn.bake()`` called from a script (or in background mode) bakes to the end
-before it returns. Invoked from the UI it is modal: a timer drives the bake, the status bar
-shows the frame and a progress bar, Esc cancels and leaves the previous bake untouched.
+``bpy.ops.thinburn.bake()`` (the active mesh) and ``bpy.ops.thinburn.bake_all()`` (every
+enabled sheet of the scene) called from a script (or in background mode) bake to the end
+before they return. Invoked from the UI they are modal: a timer drives the bake, the status
+bar shows the sheet, the frame and a progress bar, Esc cancels and leaves the previous bake
+untouched. ``bake_now`` is the bake-to-the-end that Quick Burn and headless bakes share.
 """
 from __future__ import annotations
 
@@ -32,65 +34,99 @@ def _sheet(context):
 def _draw_status(self, context):
     job = running_job(context.scene)
     if job is not None:
+        batch = getattr(job, "batch", None)
+        which = f"'{job.obj_name}' ({batch[0]} of {batch[1]}) " if batch and batch[1] > 1 else ""
         self.layout.progress(factor=job.progress, type="BAR",
-                             text=f"ThinBurn frame {job.current_frame} / {job.frames[-1]}  (Esc cancels)")
+                             text=f"ThinBurn {which}frame {job.current_frame} / {job.frames[-1]}  (Esc cancels)")
 
 
-class THINBURN_OT_bake(bpy.types.Operator):
-    """Bake the burning of the active mesh to a PC2 cache and point attributes"""
+def bake_now(context, obj, stream=None, interval: float = 1.0, on_frame=None) -> BakeJob:
+    """Bake ``obj`` to the end before returning (scripts, background mode, Quick Burn, Bake
+    All, headless). With ``stream``, a progress line about every ``interval`` seconds (and one
+    at the end); ``on_frame(job)`` after each frame. Raises BakeError with the artist's text;
+    a failed or interrupted bake leaves the previous one as it was."""
+    scene = context.scene
+    if running_job(scene) is not None:
+        raise BakeError("another ThinBurn bake is running in this scene")
+    job = BakeJob(context, obj)
+    lines = ProgressLines(job.obj_name, stream, interval) if stream is not None else None
 
-    bl_idname = "thinburn.bake"
-    bl_label = "Bake ThinBurn"
+    def progress(j):
+        if lines is not None:
+            lines(j)
+        if on_frame is not None:
+            on_frame(j)
+    _running[scene.name] = job
+    try:
+        job.run(progress=progress)
+    except BakeError:
+        raise
+    except BaseException:
+        job.cancel()  # stop the worker, keep the previous bake, then let the error show
+        raise
+    finally:
+        _running.pop(scene.name, None)
+    if lines is not None:
+        lines(job, force=True)
+    return job
+
+
+def report_bake(op, job) -> None:
+    """The bake's message, and a warning for each thing it had to ignore."""
+    op.report({"INFO"}, job.message)
+    for text in getattr(job, "warnings", ()):
+        op.report({"WARNING"}, f"ThinBurn: {text}")
+
+
+def enabled_sheets(scene) -> list:
+    """The scene's meshes with ThinBurn enabled, by name."""
+    return [o.name for o in scene.objects if o.type == "MESH" and o.thinburn.enabled]
+
+
+class BakeSheets:
+    """Bake one sheet after another. From a script or in background mode the operator bakes to
+    the end before it returns (progress lines on stderr in background mode). Invoked from the
+    UI it is modal: a timer drives the bake, the status bar shows the sheet, the frame and a
+    progress bar, Esc cancels the bake in progress and leaves its previous bake untouched."""
+
     bl_options = {"REGISTER"}
 
     _timer = None
     _job = None
     _status_bar = False
+    _queue = ()
+    _count = 0
 
-    @classmethod
-    def poll(cls, context):
-        return _sheet(context) is not None and running_job(context.scene) is None
+    def _targets(self, context) -> list:
+        raise NotImplementedError
 
-    def _start(self, context):
-        obj = _sheet(context)
-        try:
-            job = BakeJob(context, obj)
-        except BakeError as exc:
-            self.report({"ERROR"}, f"ThinBurn: {exc}")
-            return None
-        return job
+    def _fail(self, name, exc) -> None:
+        self.report({"ERROR"}, f"ThinBurn: {exc}")
 
     def execute(self, context):
-        job = self._start(context)
-        if job is None:
-            return {"CANCELLED"}
-        _running[context.scene.name] = job
-        # From a script in background mode (blender -b) nothing else shows the bake going on.
-        progress = ProgressLines(job.obj_name, sys.stderr, 1.0) if bpy.app.background else None
-        try:
-            job.run(progress=progress)
-        except BakeError as exc:
-            self.report({"ERROR"}, f"ThinBurn: {exc}")
-            return {"CANCELLED"}
-        except BaseException:
-            job.cancel()  # stop the worker, keep the previous bake, then let the error show
-            raise
-        finally:
-            _running.pop(context.scene.name, None)
-        self.report({"INFO"}, job.message)
-        return {"FINISHED"}
+        names = self._targets(context)
+        stream = sys.stderr if bpy.app.background else None
+        baked = 0
+        for name in names:
+            try:
+                job = bake_now(context, bpy.data.objects[name], stream=stream)
+            except BakeError as exc:
+                self._fail(name, exc)
+                continue
+            baked += 1
+            report_bake(self, job)
+        return {"FINISHED"} if baked else {"CANCELLED"}
 
     def invoke(self, context, event):
         if bpy.app.background or context.window is None:
             return self.execute(context)
-        job = self._start(context)
-        if job is None:
+        self._queue = list(self._targets(context))
+        self._count = len(self._queue)
+        if not _start_next(self, context):
             return {"CANCELLED"}
-        self._job = job
-        _running[context.scene.name] = job
         wm = context.window_manager
         self._timer = wm.event_timer_add(0.05, window=context.window)
-        wm.progress_begin(0, len(job.frames))
+        wm.progress_begin(0, 1000)
         bpy.types.STATUSBAR_HT_header.append(_draw_status)
         self._status_bar = True
         wm.modal_handler_add(self)
@@ -108,24 +144,27 @@ class THINBURN_OT_bake(bpy.types.Operator):
         try:
             done = job.tick(budget_s=0.04)
         except BakeError as exc:
-            self._end(context)
-            self.report({"ERROR"}, f"ThinBurn: {exc}")
-            return {"CANCELLED"}
+            _fail(self, job.obj_name, exc)
+            done = None
         except BaseException:
             job.cancel()
             self._end(context)
             raise
-        context.window_manager.progress_update(job.frames_done)
+        context.window_manager.progress_update(int(1000 * job.progress))
         context.workspace.status_text_set(
-            f"ThinBurn: baking frame {job.current_frame} of {job.frames[0]}–{job.frames[-1]}  (Esc to cancel)")
+            f"ThinBurn: baking '{job.obj_name}' frame {job.current_frame} of "
+            f"{job.frames[0]}–{job.frames[-1]}  (Esc to cancel)")
         for area in context.screen.areas:
             if area.type in {"PROPERTIES", "STATUSBAR"}:
                 area.tag_redraw()
-        if not done:
+        if done is False:
+            return {"RUNNING_MODAL"}
+        if done:
+            report_bake(self, job)
+        if _start_next(self, context):
             return {"RUNNING_MODAL"}
         self._end(context)
-        self.report({"INFO"}, job.message)
-        return {"FINISHED"}
+        return {"FINISHED"} if done else {"CANCELLED"}
 
     def _end(self, context):
         wm = context.window_manager
@@ -142,6 +181,69 @@ class THINBURN_OT_bake(bpy.types.Operator):
             area.tag_redraw()
 
 
+def _fail(op, name, exc) -> None:
+    fail = getattr(op, "_fail", None)
+    if fail is not None:
+        fail(name, exc)
+    else:
+        op.report({"ERROR"}, f"ThinBurn: {exc}")
+
+
+def _start_next(op, context) -> bool:
+    """Start the modal operator's next sheet (skipping those that cannot start). False when
+    none is left."""
+    queue = getattr(op, "_queue", None) or []
+    _running.pop(context.scene.name, None)
+    while queue:
+        name = queue.pop(0)
+        try:
+            job = BakeJob(context, bpy.data.objects[name])
+        except BakeError as exc:
+            _fail(op, name, exc)
+            continue
+        job.batch = (op._count - len(queue), op._count)
+        op._job = job
+        _running[context.scene.name] = job
+        return True
+    return False
+
+
+class THINBURN_OT_bake(BakeSheets, bpy.types.Operator):
+    """Bake the burning of the active mesh to a PC2 cache and point attributes"""
+
+    bl_idname = "thinburn.bake"
+    bl_label = "Bake ThinBurn"
+
+    @classmethod
+    def poll(cls, context):
+        return _sheet(context) is not None and running_job(context.scene) is None
+
+    def _targets(self, context) -> list:
+        return [_sheet(context).name]
+
+
+class THINBURN_OT_bake_all(BakeSheets, bpy.types.Operator):
+    """Bake every sheet of the scene that has ThinBurn enabled, one after another"""
+
+    bl_idname = "thinburn.bake_all"
+    bl_label = "Bake All ThinBurn"
+
+    @classmethod
+    def poll(cls, context):
+        return running_job(context.scene) is None
+
+    def _targets(self, context) -> list:
+        names = enabled_sheets(context.scene)
+        if not names:
+            self.report({"ERROR"}, f"ThinBurn: no sheet to bake: no mesh in the scene "
+                                   f"'{context.scene.name}' has ThinBurn enabled (tick the "
+                                   "checkbox in Properties > Physics > ThinBurn)")
+        return names
+
+    def _fail(self, name, exc) -> None:
+        self.report({"ERROR"}, f"ThinBurn: '{name}': {exc}")
+
+
 class THINBURN_OT_free_bake(bpy.types.Operator):
     """Remove the active mesh's ThinBurn bake: cache file, modifiers, attributes, material"""
 
@@ -156,15 +258,19 @@ class THINBURN_OT_free_bake(bpy.types.Operator):
     def execute(self, context):
         obj = _sheet(context)
         gone = materials.free_bake(obj)
+        kept = [g for g in gone if g.startswith("kept ")]
+        gone = [g for g in gone if not g.startswith("kept ")]
         if not gone:
             self.report({"INFO"}, f"ThinBurn: '{obj.name}' has no bake to free")
         else:
             self.report({"INFO"}, "ThinBurn: removed " + ", ".join(gone))
+        for text in kept:
+            self.report({"INFO"}, f"ThinBurn: {text}")
         return {"FINISHED"}
 
 
 class THINBURN_OT_load_preset(bpy.types.Operator):
-    """Reload the material preset's values into the Material fields"""
+    """Reload the preset's values into Advanced > Burns Like"""
 
     bl_idname = "thinburn.load_preset"
     bl_label = "Reset to Preset"
@@ -180,7 +286,8 @@ class THINBURN_OT_load_preset(bpy.types.Operator):
         return {"FINISHED"}
 
 
-CLASSES = (THINBURN_OT_bake, THINBURN_OT_free_bake, THINBURN_OT_load_preset)
+CLASSES = (THINBURN_OT_bake, THINBURN_OT_bake_all, THINBURN_OT_free_bake,
+           THINBURN_OT_load_preset)
 
 
 class THINBURN_OT_add_burn_to_material(bpy.types.Operator):
@@ -213,12 +320,25 @@ class THINBURN_OT_add_burn_to_material(bpy.types.Operator):
 CLASSES = CLASSES + (THINBURN_OT_add_burn_to_material,)
 
 
+@bpy.app.handlers.persistent
+def _claim_unsaved_bakes(filepath, *_):
+    """A bake made before the file was first saved belongs to the file it is saved as (so that
+    Free there deletes its cache, and Free in a later Save As copy does not)."""
+    for obj in bpy.data.objects:
+        settings = getattr(obj, "thinburn", None)
+        if settings is not None and len(settings.baked_files) and not settings.baked_blend:
+            settings.baked_blend = filepath
+
+
 def register():
     for cls in CLASSES:
         bpy.utils.register_class(cls)
+    bpy.app.handlers.save_pre.append(_claim_unsaved_bakes)
 
 
 def unregister():
+    if _claim_unsaved_bakes in bpy.app.handlers.save_pre:
+        bpy.app.handlers.save_pre.remove(_claim_unsaved_bakes)
     for job in list(_running.values()):
         job.cancel()
     _running.clear()

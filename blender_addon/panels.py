@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import bpy
 
-from . import job, materials
+from . import inputs, job, materials
 from .operators import running_job
 from .properties import DYNAMIC_PARAMS, MATERIAL_FIELDS, MODEL_PARAMS
 
@@ -46,6 +46,27 @@ class PHYSICS_PT_thinburn(ThinBurnPhysicsPanel, bpy.types.Panel):
         layout.prop(settings, "crumple")
         layout.prop(settings, "igniter_collection")
         layout.prop(settings, "wind_scale")
+        layout.operator("thinburn.quick_burn", icon="LIGHT_SUN")
+        if settings.enabled:
+            for text in sheet_warnings(context, context.object):
+                warning(layout, text)
+
+
+def sheet_warnings(context, obj) -> list:
+    """What the bake will ignore, as the panel says it (the bake's report says it too)."""
+    out = []
+    moving = inputs.transform_animation(obj)
+    if moving:
+        out.append(inputs.moved_warning(obj.name, moving, obj.thinburn.frame_start))
+    return out + inputs.wind_warnings(context.view_layer)
+
+
+def warning(layout, text: str, width: int = 52) -> None:
+    """A warning in the panel, wrapped over as many lines as it needs."""
+    import textwrap
+    col = layout.column(align=True)
+    for i, line in enumerate(textwrap.wrap(text, width)):
+        col.label(text=line, icon="ERROR" if i == 0 else "BLANK1")
 
 
 class PHYSICS_PT_thinburn_motion(ThinBurnPhysicsPanel, bpy.types.Panel):
@@ -108,6 +129,7 @@ class PHYSICS_PT_thinburn_cache(ThinBurnPhysicsPanel, bpy.types.Panel):
         row = layout.row(align=True)
         row.operator("thinburn.bake", icon="RENDER_ANIMATION")
         row.operator("thinburn.free_bake", text="Free", icon="TRASH")
+        layout.operator("thinburn.bake_all", icon="RENDER_ANIMATION")
         if settings.baked_file and obj.modifiers.get(materials.CACHE_MODIFIER):
             layout.label(text=f"Baked: {settings.baked_file}", icon="CHECKMARK")
 
@@ -150,11 +172,11 @@ class PHYSICS_PT_thinburn_advanced(ThinBurnPhysicsPanel, bpy.types.Panel):
         layout.prop(settings, "front")
         layout.prop(settings, "seed")
         layout.prop(settings, "threads")
-        box = layout.column(heading="Material")
+        box = layout.column(heading="Burns Like")
         for field in MATERIAL_FIELDS:
             box.prop(settings, "mat_" + field)
         layout.operator("thinburn.load_preset", icon="LOOP_BACK")
-        col = layout.column(heading="Model")
+        col = layout.column(heading="Spread")
         for key in MODEL_PARAMS:
             col.prop(settings, key)
 

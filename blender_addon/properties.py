@@ -6,8 +6,8 @@ not offered for keyframing, so the UI never suggests an animation the bake would
 """
 import bpy
 import thinburn
-from bpy.props import (BoolProperty, EnumProperty, FloatProperty, IntProperty, PointerProperty,
-                       StringProperty)
+from bpy.props import (BoolProperty, CollectionProperty, EnumProperty, FloatProperty, IntProperty,
+                       PointerProperty, StringProperty)
 
 STATIC = set()  # options=STATIC: not animatable (read once per bake)
 # Blender 4.5+ warns about '//' in path properties that do not declare they accept it.
@@ -16,17 +16,17 @@ RELATIVE_PATH = {"PATH_SUPPORTS_BLEND_RELATIVE"} if bpy.app.version >= (4, 5, 0)
 # Material fields the panel exposes (thinburn.Material), with their UI text.
 MATERIAL_FIELDS = {
     "mass": ("Mass", "Areal density in Table 1's unit of 0.1 kg/m² (paper 0.45 = 45 g/m²)", 0.001, 100.0),
-    "V0": ("Spread Speed", "Speed of the fire front on a flat, level sheet, mm/s (Table 1, V0 of eq. 1)", 0.001, 1000.0),
-    "Cv": ("Slope Factor", "How much a curved or tilted sheet slows the front: V = V0·(1 − Cv·grad²) (eq. 1)", 0.0, 10.0),
+    "V0": ("Spread Speed", "How fast the fire spreads over a flat, level sheet, mm/s (Table 1, V0 of eq. 1)", 0.001, 1000.0),
+    "Cv": ("Slows on Curves", "How much a curved or tilted sheet slows the fire: V = V0·(1 − Cv·grad²) (the paper's slope factor Cv, eq. 1)", 0.0, 10.0),
     "burn_duration": ("Burn Duration", "Seconds a cell keeps burning after the front reaches it", 0.01, 600.0),
     "speed_noise": ("Speed Noise", "Random per-cell jitter of the spread speed, relative; breaks up grid-aligned fronts", 0.0, 0.9),
     "duration_noise": ("Duration Noise", "Random per-cell jitter of the burn duration, relative", 0.0, 0.9),
     "ash_fraction": ("Ash Fraction", "Share of its mass a burnt cell keeps as ash", 0.0, 1.0),
-    "Cp": ("Pyrolysis", "How strongly burning material shrinks (Table 1, Cp of eq. 3)", 0.0, 100.0),
+    "Cp": ("Shrink When Burning", "How strongly burning material shrinks and curls (pyrolysis: Table 1, Cp of eq. 3)", 0.0, 100.0),
     "C_damping": ("Damping", "Damping of the sheet's motion (Table 1, eq. 12)", 0.0, 100.0),
-    "K_structure": ("Structure Stiffness", "Stiffness of the lattice's stretch springs (Table 1)", 0.0, 100.0),
+    "K_structure": ("Stretch Stiffness", "How hard the sheet resists stretching (the lattice's structure springs, Table 1)", 0.0, 100.0),
     "K_shear": ("Shear Stiffness", "Stiffness of the lattice's shear springs (Table 1)", 0.0, 100.0),
-    "K_flex": ("Flexion Stiffness", "Stiffness of the lattice's bending springs (Table 1)", 0.0, 100.0),
+    "K_flex": ("Bend Stiffness", "How hard the sheet resists bending (the lattice's flexion springs, Table 1)", 0.0, 100.0),
 }
 
 # Motion parameters read every frame (keyframeable) and passed to Simulation.set_dynamics
@@ -35,15 +35,15 @@ DYNAMIC_PARAMS = {
     "buoyancy": ("Buoyancy", "Lift of hot material: N/kg per unit of heat, along world +Z", 1.0, 0.0, 100.0),
     "wind_drag": ("Wind Drag", "How hard the wind pushes on the sheet, Pa·s/m (force per area per m/s of relative wind)", 1.0, 0.0, 100.0),
     "friction": ("Friction", "Coulomb friction of the sheet on the floor", 0.5, 0.0, 10.0),
-    "crumple_gain": ("Crumple Gain", "Multiplies how much the burn's bending turns into crumpling motion", 1.0, 0.0, 10.0),
+    "crumple_gain": ("Crumple Amount", "Multiplies how much the burn's bending turns into crumpling motion (the core's crumple_gain)", 1.0, 0.0, 10.0),
 }
 
 # Model scalars passed as Simulation(**params); defaults equal the core's (a test checks).
 MODEL_PARAMS = {
-    "v_floor": ("Speed Floor", "Lowest spread speed as a fraction of V0, so steep folds still burn", 0.05, 0.001, 1.0),
+    "v_floor": ("Slowest Spread", "The slowest the fire may spread on a steep fold, as a share of Spread Speed, so folds still burn (the core's v_floor)", 0.05, 0.001, 1.0),
     "climb": ("Climb", "How much faster flames run uphill along the sheet; 0 is the paper's symmetric spread", 0.0, 0.0, 0.9),
     "wind_spread": ("Wind Spread", "Extra push on the front per m/s of wind along the sheet", 0.0, 0.0, 100.0),
-    "max_drive": ("Max Drive", "Cap on the directional push (climb and wind), so the back of the fire never stalls", 0.9, 0.0, 0.95),
+    "max_drive": ("Climb and Wind Limit", "Caps how much Climb and Wind Spread speed up the fire one way, so the fire never stalls on the other (the core's max_drive)", 0.9, 0.0, 0.95),
 }
 
 
@@ -102,6 +102,20 @@ def _field_props():
     return props
 
 
+class ThinBurnBakedFile(bpy.types.PropertyGroup):
+    """A file a bake wrote (a path as the modifier has it: '//' stays relative)."""
+
+    path: StringProperty(name="Path", subtype="FILE_PATH", options=RELATIVE_PATH,
+                         description="A cache file the sheet's bake wrote; Free Bake deletes it")
+
+
+class ThinBurnBakedObject(bpy.types.PropertyGroup):
+    """An object a bake made (flames, their light, embers, ash flakes)."""
+
+    object: PointerProperty(name="Object", type=bpy.types.Object,
+                            description="An object the sheet's bake made; Free Bake removes it")
+
+
 class ThinBurnSettings(bpy.types.PropertyGroup):
     """A burning sheet: what the Physics panel edits and the bake reads."""
 
@@ -109,24 +123,26 @@ class ThinBurnSettings(bpy.types.PropertyGroup):
         name="ThinBurn", default=False, options=STATIC,
         description="Burn this mesh as a thin sheet with ThinBurn")
     material: EnumProperty(
-        name="Material", items=_MATERIAL_ITEMS, default="paper", update=_on_material, options=STATIC,
-        description="Table 1 preset of Liu et al. 2009; choosing one loads its values into the "
-                    "Material fields under Advanced")
+        name="Burns Like", items=_MATERIAL_ITEMS, default="paper", update=_on_material, options=STATIC,
+        description="What the sheet burns and moves like: a preset of Table 1 of Liu et al. 2009 "
+                    "(the paper's 'material'); choosing one loads its values into Advanced > "
+                    "Burns Like")
     cells: IntProperty(
-        name="Cells", default=128, min=8, max=1024, soft_max=512, options=STATIC,
-        description="The sheet is divided into Cells × Cells fire cells (the paper uses 128). "
-                    "More cells give finer fronts and cost more")
+        name="Fire Detail", default=128, min=8, max=1024, soft_max=512, options=STATIC,
+        description="How finely the fire spreads: the sheet is divided into this many fire cells "
+                    "per side (the paper's N, 128 there). More give finer fronts and cost more")
     lattice: IntProperty(
-        name="Lattice", default=0, min=0, max=257, soft_max=64, options=STATIC,
-        description="Resolution of the lattice that carries the sheet's motion, Lattice × Lattice "
-                    "couples; 0 chooses it from the sheet's size and the cells")
+        name="Motion Detail", default=0, min=0, max=257, soft_max=64, options=STATIC,
+        description="How finely the sheet's motion is simulated: the lattice that carries it has "
+                    "this many couples per side (the paper's M); 0 chooses it from the sheet's "
+                    "size and the Fire Detail")
     crumple: BoolProperty(
         name="Crumple", default=True, options=STATIC,
         description="Simulate the sheet's motion (paper §4: heat, bending, gravity, wind, fire "
                     "particles). Off: only the fire runs and the sheet keeps its rest shape")
     integrator: EnumProperty(
-        name="Integrator", default="implicit", options=STATIC,
-        description="Time integration of the sheet's motion",
+        name="Solver", default="implicit", options=STATIC,
+        description="How the sheet's motion is stepped in time (the integrator)",
         items=[("implicit", "Implicit", "Backward Euler: stable at frame-sized steps (default)", 0),
                ("symplectic", "Symplectic", "Symplectic Euler, substepped as stability needs", 1),
                ("explicit", "Explicit", "The paper's explicit scheme (eqs 13-15), substepped as stability needs", 2)])
@@ -213,6 +229,18 @@ class ThinBurnSettings(bpy.types.PropertyGroup):
     baked_file: StringProperty(
         name="Baked File", default="", options=STATIC,
         description="The PC2 file of the current bake (set by the bake, cleared by Free Bake)")
+    # What the bake wrote, so that Free removes all of it after a rename, and the file that made
+    # it, so that Free in a copy made by Save As never deletes the original's cache.
+    baked_files: CollectionProperty(
+        type=ThinBurnBakedFile, name="Baked Files",
+        description="Every cache file the current bake wrote (Free Bake deletes them)")
+    baked_objects: CollectionProperty(
+        type=ThinBurnBakedObject, name="Baked Objects",
+        description="Every object the current bake made (Free Bake removes them)")
+    baked_blend: StringProperty(
+        name="Baked In", default="", options=STATIC,
+        description="The .blend file the current bake was made in: only there does Free Bake "
+                    "delete its cache files (a copy saved under another name keeps them)")
 
     __annotations__.update(_field_props())
 
@@ -221,15 +249,16 @@ class ThinBurnIgniter(bpy.types.PropertyGroup):
     """An object that sets a sheet alight."""
 
     strength: FloatProperty(
-        name="Strength", default=1.0, min=0.0, soft_max=1.0,
-        description="Above 0 the igniter is lit: cells within its radius catch fire at that "
-                    "frame. Keyframe it to light the sheet at a chosen time")
+        name="Lit", default=1.0, min=0.0, soft_max=1.0,
+        description="1 lights the sheet, 0 puts the igniter out (any value above 0 is lit; the "
+                    "igniter's strength): cells within its radius catch fire at that frame. "
+                    "Keyframe it to light the sheet at a chosen time")
     radius: FloatProperty(
         name="Radius", default=0.02, min=0.0, soft_max=1.0, subtype="DISTANCE", unit="LENGTH",
         description="Cells within this distance of the igniter catch fire (0: the nearest cell)")
 
 
-CLASSES = (ThinBurnSettings, ThinBurnIgniter)
+CLASSES = (ThinBurnBakedFile, ThinBurnBakedObject, ThinBurnSettings, ThinBurnIgniter)
 
 
 def register():

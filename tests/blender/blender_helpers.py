@@ -67,6 +67,16 @@ def make_igniter(sheet, location, lit_from=1, radius=0.03, name="Igniter", key_f
     return empty
 
 
+def make_table(top=0.75):
+    """A 1 m cube scaled to a table whose top face is at z = top (its origin at its centre)."""
+    import bpy
+    bpy.ops.mesh.primitive_cube_add(size=1.0, location=(0.0, 0.0, top - 0.05))
+    table = bpy.context.active_object
+    table.scale = (1.0, 1.0, 0.1)
+    bpy.context.view_layer.update()
+    return table
+
+
 def setup_bake(sheet, frames=24, cells=32, cache_dir=None, floor=True):
     """Bake settings for a test: one core thread (results do not depend on it; the test
     machine is small) and, by default, a floor at the sheet's lowest point so that it lies
@@ -85,6 +95,14 @@ def setup_bake(sheet, frames=24, cells=32, cache_dir=None, floor=True):
     return s
 
 
+def cache_file(folder, name="Sheet.pc2"):
+    """Where a bake into the Cache Folder ``folder`` writes ``name``: a folder per .blend
+    ('untitled' while unsaved), so that two files never share a cache."""
+    import bpy
+    stem = Path(bpy.data.filepath).stem if bpy.data.filepath else "untitled"
+    return Path(folder) / stem / name
+
+
 def evaluated_positions(obj, frame):
     """Local vertex positions of the evaluated mesh at a frame (n, 3)."""
     import bpy
@@ -97,9 +115,48 @@ def evaluated_positions(obj, frame):
     return co.reshape(-1, 3)
 
 
+def evaluated_colours(obj, frame, name="thinburn_char"):
+    """The evaluated mesh's colour attribute at a frame (n, 4)."""
+    import bpy
+    bpy.context.scene.frame_set(frame)
+    dg = bpy.context.evaluated_depsgraph_get()
+    attr = obj.evaluated_get(dg).data.attributes[name]
+    out = np.empty(4 * len(attr.data), dtype=np.float32)
+    attr.data.foreach_get("color", out)
+    return out.reshape(-1, 4)
+
+
 def point_attribute(obj, name):
     mesh = obj.data
     attr = mesh.attributes[name]
     values = np.empty(len(attr.data), dtype=np.float32)
     attr.data.foreach_get("value", values)
     return values
+
+
+# --- the modal operator without a window ------------------------------------------------------
+def modal_harness(addon, job, queue=()):
+    """The modal bake operator's methods on a stand-in instance (no window in bpy-as-a-module):
+    ``send(event type)`` returns what modal() returns; ``queue``: sheets to bake after ``job``."""
+    import bpy
+    from types import SimpleNamespace
+    op_cls = addon.operators.THINBURN_OT_bake
+    reports, status = [], []
+    op = SimpleNamespace(_job=job, _timer=None, _status_bar=False, _queue=list(queue),
+                         _count=1 + len(queue),
+                         report=lambda kind, text: reports.append((kind, text)))
+    op._end = lambda ctx: op_cls._end(op, ctx)
+    ctx = SimpleNamespace(window_manager=bpy.context.window_manager, scene=bpy.context.scene,
+                          view_layer=bpy.context.view_layer,
+                          workspace=SimpleNamespace(status_text_set=status.append),
+                          screen=SimpleNamespace(areas=[]))
+    addon.operators._running[ctx.scene.name] = job
+
+    def send(kind):
+        return op_cls.modal(op, ctx, SimpleNamespace(type=kind, value="PRESS"))
+    return send, reports, status
+
+
+def worker_busy(job) -> bool:
+    """The bake's worker still runs or has results not yet taken."""
+    return job.worker.is_alive() or not job.worker.results.empty()

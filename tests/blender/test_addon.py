@@ -161,8 +161,8 @@ class _Layout:
         assert hasattr(getattr(bpy.ops, category), op), idname
         self.log.append(idname)
 
-    def label(self, **kwargs):
-        pass
+    def label(self, text="", **kwargs):
+        self.log.append("label: " + text)
 
     def progress(self, **kwargs):
         pass
@@ -173,6 +173,7 @@ class _Context:
         self.object = obj
         self.active_object = obj
         self.scene = bpy.context.scene
+        self.view_layer = bpy.context.view_layer
 
 
 def _igniter_collection(sheet):
@@ -201,7 +202,8 @@ def test_panels_draw_existing_properties_and_operators(addon):
     for name in ("enabled", "material", "cells", "lattice", "igniter_collection", "pin_group",
                  "frame_start", "frame_end", "cache_dir", "thinburn.bake", "thinburn.free_bake",
                  "mat_V0", "v_floor", "strength", "radius", "flame_height", "flame_intensity",
-                 "flame_temperature", "embers", "thinburn.add_burn_to_material"):
+                 "flame_temperature", "embers", "thinburn.add_burn_to_material",
+                 "thinburn.quick_burn", "thinburn.bake_all"):
         assert name in drawn, name
 
 
@@ -270,3 +272,53 @@ def test_panels_appear_only_where_they_apply(addon):
     assert "OBJECT_PT_thinburn_igniter" not in shown(sheet)
     assert shown(igniter) == {"OBJECT_PT_thinburn_igniter"}
     assert shown(stray) == set()
+
+
+def _panel_text(addon, obj) -> str:
+    drawn = []
+    ctx = _Context(obj)
+    for cls in addon.panels.CLASSES:
+        if cls.poll(ctx):
+            cls.draw(type("P", (), {"layout": _Layout(drawn)})(), ctx)
+    return " ".join(d[len("label: "):] for d in drawn if d.startswith("label: "))
+
+
+def test_the_panel_warns_of_an_animated_sheet_and_of_wind_settings_it_ignores(addon):
+    # Issue #14: an animated sheet never burnt, and a Wind field's falloff and noise were
+    # ignored, and nothing said so.
+    sheet = make_sheet()
+    sheet.thinburn.enabled = True
+    assert "ignore" not in _panel_text(addon, sheet)  # a still sheet, no wind: nothing to say
+    sheet.keyframe_insert("location", frame=1)
+    bpy.ops.object.effector_add(type="WIND")
+    wind = bpy.context.active_object
+    wind.name = "Breeze"
+    wind.field.noise = 2.0
+    wind.field.falloff_power = 1.5
+    bpy.ops.object.effector_add(type="TURBULENCE")
+    bpy.context.active_object.name = "Gusts"
+    text = " ".join(_panel_text(addon, sheet).split())
+    assert "'Sheet' moves in the scene (its location (animated))" in text
+    assert "Keep the sheet still" in text
+    assert "Wind 'Breeze': its Falloff (Sphere, power 1.5), Noise (2) are ignored" in text
+    assert "'Gusts' (a Turbulence field) does not act on ThinBurn sheets" in text
+
+
+def test_settings_speak_an_artists_words_and_keep_the_papers_in_tooltips(addon):
+    # Issue #14: "Material" meant a physics preset, "Strength" was on/off, "Slope Factor",
+    # "Max Drive". The identifiers stay (saved files and keyframes use them); the labels change.
+    props = addon.properties.ThinBurnSettings.bl_rna.properties
+    igniter = addon.properties.ThinBurnIgniter.bl_rna.properties
+    expect = {
+        (props, "material"): ("Burns Like", "Table 1"),
+        (props, "mat_Cv"): ("Slows on Curves", "slope factor Cv"),
+        (props, "max_drive"): ("Climb and Wind Limit", "max_drive"),
+        (props, "v_floor"): ("Slowest Spread", "v_floor"),
+        (props, "cells"): ("Fire Detail", "fire cells"),
+        (props, "lattice"): ("Motion Detail", "lattice"),
+        (props, "mat_Cp"): ("Shrink When Burning", "Cp"),
+        (igniter, "strength"): ("Lit", "strength"),
+    }
+    for (group, ident), (label, paper) in expect.items():
+        assert group[ident].name == label, ident
+        assert paper in group[ident].description, ident

@@ -9,8 +9,9 @@ import pytest
 bpy = pytest.importorskip("bpy")
 pytestmark = pytest.mark.blender
 
-from blender_helpers import (evaluated_positions, make_igniter, make_sheet,  # noqa: E402
-                             point_attribute, setup_bake)
+from blender_helpers import (cache_file, evaluated_colours, evaluated_positions, make_igniter, make_sheet,  # noqa: E402
+                             make_table, modal_harness, point_attribute, setup_bake,
+                             worker_busy)
 
 FRAMES = 30
 LIT_FROM = 8
@@ -28,12 +29,12 @@ def baked(addon, tmp_path):
 
 def test_pc2_file_matches_the_mesh_and_frames(addon, baked, tmp_path):
     cache = addon.cache
-    path = tmp_path / "cache" / "Sheet.pc2"
+    path = cache_file(tmp_path / "cache", "Sheet.pc2")
     head, data = cache.read_pc2(path)
     assert head["points"] == len(baked.data.vertices) == 81
     assert head["samples"] == FRAMES
     assert head["start_frame"] == 1.0 and head["sample_rate"] == 1.0 and head["version"] == 1
-    assert not (tmp_path / "cache" / "Sheet.pc2.partial").exists()
+    assert not (cache_file(tmp_path / "cache", "Sheet.pc2.partial")).exists()
     rest = np.array([v.co for v in baked.data.vertices], dtype=np.float32)
     np.testing.assert_allclose(data[0], rest, atol=1e-6)  # the first frame is the rest mesh
 
@@ -42,9 +43,9 @@ def test_modifier_plays_the_cache(addon, baked, tmp_path):
     md = baked.modifiers[0]
     assert md.name == "ThinBurn Cache" and md.type == "MESH_CACHE"
     assert md.cache_format == "PC2" and md.frame_start == 1.0
-    assert bpy.path.abspath(md.filepath) == str(tmp_path / "cache" / "Sheet.pc2")
+    assert bpy.path.abspath(md.filepath) == str(cache_file(tmp_path / "cache", "Sheet.pc2"))
     assert baked.modifiers[1].name == "ThinBurn Burn" and baked.modifiers[1].type == "NODES"
-    _, data = addon.cache.read_pc2(tmp_path / "cache" / "Sheet.pc2")
+    _, data = addon.cache.read_pc2(cache_file(tmp_path / "cache", "Sheet.pc2"))
     for frame in (1, 15, FRAMES):
         np.testing.assert_allclose(evaluated_positions(baked, frame), data[frame - 1], atol=1e-6)
 
@@ -70,15 +71,7 @@ def test_attributes_hold_frames_and_nothing_ignites_before_the_key(addon, baked)
 
 
 def test_viewport_colour_follows_the_frame(addon, baked):
-    def char_colours(frame):
-        bpy.context.scene.frame_set(frame)
-        dg = bpy.context.evaluated_depsgraph_get()
-        mesh = baked.evaluated_get(dg).data
-        attr = mesh.attributes["thinburn_char"]
-        out = np.empty(4 * len(attr.data), dtype=np.float32)
-        attr.data.foreach_get("color", out)
-        return out.reshape(-1, 4)
-
+    char_colours = lambda frame: evaluated_colours(baked, frame)
     before, after = char_colours(LIT_FROM - 1), char_colours(FRAMES)
     assert np.ptp(before[:, :3], axis=0).max() < 1e-6  # all paper before the fire
     assert before[0, :3].sum() - after[0, :3].sum() > 0.5  # the lit corner darkened
@@ -102,7 +95,7 @@ def test_sheet_moves_once_the_core_crumples(addon, baked, tmp_path):
 
 
 def test_cancel_keeps_the_previous_bake(addon, baked, tmp_path):
-    path = tmp_path / "cache" / "Sheet.pc2"
+    path = cache_file(tmp_path / "cache", "Sheet.pc2")
     before_file = path.read_bytes()
     before_ignite = point_attribute(baked, "thinburn_ignite_time").copy()
     bpy.context.scene.frame_set(5)
@@ -113,7 +106,7 @@ def test_cancel_keeps_the_previous_bake(addon, baked, tmp_path):
         job.tick(budget_s=0.05)
     job.cancel()
     assert path.read_bytes() == before_file
-    assert not (tmp_path / "cache" / "Sheet.pc2.partial").exists()
+    assert not (cache_file(tmp_path / "cache", "Sheet.pc2.partial")).exists()
     np.testing.assert_array_equal(point_attribute(baked, "thinburn_ignite_time"), before_ignite)
     assert baked.modifiers[0].name == "ThinBurn Cache"
     assert bpy.context.scene.frame_current == 5  # the artist's frame is back
@@ -124,7 +117,7 @@ def test_free_removes_the_bake(addon, baked, tmp_path):
     assert not baked.modifiers
     names = {a.name for a in baked.data.attributes}
     assert not names & {"thinburn_ignite_time", "thinburn_burnout_time", "thinburn_char"}
-    assert not (tmp_path / "cache" / "Sheet.pc2").exists()
+    assert not (cache_file(tmp_path / "cache", "Sheet.pc2")).exists()
     assert not any(slot.material for slot in baked.material_slots)
     assert baked.thinburn.baked_file == ""
 
@@ -136,12 +129,12 @@ def test_bake_survives_save_and_reload(addon, tmp_path):
     setup_bake(sheet, frames=12)  # the default cache folder: //thinburn_cache/
     make_igniter(sheet, (0.0, 0.0, 0.5), lit_from=1)
     assert bpy.ops.thinburn.bake() == {"FINISHED"}
-    assert sheet.modifiers["ThinBurn Cache"].filepath == "//thinburn_cache/Sheet.pc2"
+    assert sheet.modifiers["ThinBurn Cache"].filepath == "//thinburn_cache/scene/Sheet.pc2"
     bpy.ops.wm.save_mainfile()
     expect = evaluated_positions(sheet, 12)
     bpy.ops.wm.open_mainfile(filepath=str(blend))
     sheet = bpy.data.objects["Sheet"]
-    path = tmp_path / "thinburn_cache" / "Sheet.pc2"
+    path = tmp_path / "thinburn_cache" / "scene" / "Sheet.pc2"
     assert path.exists()
     assert bpy.path.abspath(sheet.modifiers["ThinBurn Cache"].filepath) == str(path)
     np.testing.assert_allclose(evaluated_positions(sheet, 12), expect, atol=1e-7)
@@ -228,35 +221,12 @@ def test_bad_settings_give_a_clear_report(addon, tmp_path, case, message):
     assert not sheet.modifiers
 
 
-def _modal_harness(addon, job):
-    """The modal operator's methods on a stand-in instance (no window in bpy-as-a-module)."""
-    from types import SimpleNamespace
-    op_cls = addon.operators.THINBURN_OT_bake
-    reports, status = [], []
-    op = SimpleNamespace(_job=job, _timer=None, _status_bar=False,
-                         report=lambda kind, text: reports.append((kind, text)))
-    op._end = lambda ctx: op_cls._end(op, ctx)
-    ctx = SimpleNamespace(window_manager=bpy.context.window_manager, scene=bpy.context.scene,
-                          workspace=SimpleNamespace(status_text_set=status.append),
-                          screen=SimpleNamespace(areas=[]))
-    addon.operators._running[ctx.scene.name] = job
-
-    def send(kind):
-        return op_cls.modal(op, ctx, SimpleNamespace(type=kind, value="PRESS"))
-    return send, reports, status
-
-
-def _worker_busy(job) -> bool:
-    """The bake's worker still runs or has results not yet taken."""
-    return job.worker.is_alive() or not job.worker.results.empty()
-
-
 def test_modal_bake_runs_on_timer_events_and_esc_cancels(addon, baked, tmp_path):
-    path = tmp_path / "cache" / "Sheet.pc2"
+    path = cache_file(tmp_path / "cache", "Sheet.pc2")
     before = path.read_bytes()
     before_ignite = point_attribute(baked, "thinburn_ignite_time").copy()
     bpy.data.objects["Igniter"].location = (0.1, 0.1, 0.5)
-    send, reports, status = _modal_harness(addon, addon.job.BakeJob(bpy.context, baked))
+    send, reports, status = modal_harness(addon, addon.job.BakeJob(bpy.context, baked))
     assert send("MOUSEMOVE") == {"PASS_THROUGH"}
     for _ in range(3):
         assert send("TIMER") == {"RUNNING_MODAL"}
@@ -268,11 +238,11 @@ def test_modal_bake_runs_on_timer_events_and_esc_cancels(addon, baked, tmp_path)
     assert addon.operators.running_job(bpy.context.scene) is None
 
     job = addon.job.BakeJob(bpy.context, baked)
-    send, reports, status = _modal_harness(addon, job)
+    send, reports, status = modal_harness(addon, job)
     # Bounded by the bake itself, not by a clock a loaded machine outruns: the loop ends when the
     # job finishes or its worker is gone with nothing left to hand over.
     try:
-        while (result := send("TIMER")) == {"RUNNING_MODAL"} and _worker_busy(job):
+        while (result := send("TIMER")) == {"RUNNING_MODAL"} and worker_busy(job):
             time.sleep(0.001)  # timer events come every 50 ms in Blender
     finally:
         if not job.finished:
@@ -292,7 +262,7 @@ def test_deleting_an_igniter_mid_bake_stops_cleanly(addon, baked, tmp_path, monk
     run = addon.worker.CoreWorker.run
     monkeypatch.setattr(addon.worker.CoreWorker, "run",
                         lambda self: (time.sleep(worker_start_s), run(self)))
-    path = tmp_path / "cache" / "Sheet.pc2"
+    path = cache_file(tmp_path / "cache", "Sheet.pc2")
     before = path.read_bytes()
     job = addon.job.BakeJob(bpy.context, baked)
     job.tick()
@@ -302,14 +272,14 @@ def test_deleting_an_igniter_mid_bake_stops_cleanly(addon, baked, tmp_path, monk
     # by a count or a clock that a loaded machine outruns.
     try:
         with pytest.raises(addon.inputs.BakeError, match="'Igniter' was deleted"):
-            while not job.finished and _worker_busy(job):
+            while not job.finished and worker_busy(job):
                 job.tick()
                 time.sleep(0.001)
     finally:
         if not job.finished:
             job.cancel()  # a failed check must not leak the open partial file
     assert job.finished and not job.worker.is_alive()
-    assert path.read_bytes() == before and not (tmp_path / "cache" / "Sheet.pc2.partial").exists()
+    assert path.read_bytes() == before and not (cache_file(tmp_path / "cache", "Sheet.pc2.partial")).exists()
 
 
 def test_bake_writes_fire_particles_when_the_core_has_them(addon, tmp_path, monkeypatch):
@@ -327,33 +297,24 @@ def test_bake_writes_fire_particles_when_the_core_has_them(addon, tmp_path, monk
     setup_bake(sheet, frames=6, cache_dir=tmp_path)
     make_igniter(sheet, (0.0, 0.0, 0.5))
     assert bpy.ops.thinburn.bake() == {"FINISHED"}
-    head, data = addon.cache.read_pc2(tmp_path / "Sheet_fire.pc2")
+    head, data = addon.cache.read_pc2(cache_file(tmp_path, "Sheet_fire.pc2"))
     assert head["samples"] == 6 and head["points"] == 4  # 2 slots: positions, then (T, alive, 0)
     np.testing.assert_array_equal(data[:, 2:, 1], [[0, 0], [1, 0], [1, 1], [0, 0], [1, 0], [1, 1]])
     fire = bpy.data.objects["ThinBurn Fire Sheet"]
     assert fire.modifiers["ThinBurn Cache"].filepath.endswith("Sheet_fire.pc2")
 
 
-def _table(top=0.75):
-    """A 1 m cube scaled to a table whose top face is at z = top (its origin at its centre)."""
-    bpy.ops.mesh.primitive_cube_add(size=1.0, location=(0.0, 0.0, top - 0.05))
-    table = bpy.context.active_object
-    table.scale = (1.0, 1.0, 0.1)
-    bpy.context.view_layer.update()
-    return table
-
-
 def test_floor_object_is_the_top_of_the_table_and_the_sheet_clears_it(addon, tmp_path):
     # Issue #14: Floor = Object put the floor at the object's origin (inside a box table) or,
     # for a plane, exactly on the sheet, which z-fights in renders.
-    table = _table(0.75)
+    table = make_table(0.75)
     sheet = make_sheet(z=0.75)  # lying on the table top, as an artist places it
     make_igniter(sheet, (0.0, 0.0, 0.75), lit_from=1, radius=0.03)
     s = setup_bake(sheet, frames=12, cells=16, cache_dir=tmp_path, floor=False)
     s.floor_mode, s.floor_object = "OBJECT", table
     bpy.context.view_layer.objects.active = sheet
     assert bpy.ops.thinburn.bake() == {"FINISHED"}
-    _, samples = addon.cache.read_pc2(tmp_path / "Sheet.pc2")
+    _, samples = addon.cache.read_pc2(cache_file(tmp_path, "Sheet.pc2"))
     z = samples[..., 2] + sheet.matrix_world.translation.z
     clearance = addon.inputs.FLOOR_CLEARANCE
     assert z.min() >= 0.75 + clearance - 1e-6  # never in the table's top face
@@ -361,7 +322,7 @@ def test_floor_object_is_the_top_of_the_table_and_the_sheet_clears_it(addon, tmp
 
 
 def test_a_sheet_inside_its_floor_object_is_refused_in_an_artists_words(addon, tmp_path):
-    table = _table(0.75)
+    table = make_table(0.75)
     sheet = make_sheet(z=0.70)
     make_igniter(sheet, (0.0, 0.0, 0.70), lit_from=1, radius=0.03)
     s = setup_bake(sheet, frames=5, cells=16, cache_dir=tmp_path, floor=False)
@@ -383,3 +344,19 @@ def test_a_background_bake_prints_its_progress(addon, tmp_path, capfd):
     assert bpy.ops.thinburn.bake() == {"FINISHED"}
     lines = [l for l in capfd.readouterr().err.splitlines() if l.startswith("ThinBurn: 'Sheet' frame")]
     assert lines and "ETA" in lines[0] and "%" in lines[0]
+
+
+def test_ash_flakes_land_on_the_top_of_the_floor_object(addon, tmp_path, monkeypatch):
+    # They landed at the Floor object's origin, inside a box table (the bake's floor is its top).
+    landed = []
+    real = addon.materials.apply_flakes
+    monkeypatch.setattr(addon.materials, "apply_flakes",
+                        lambda *args: (landed.append(args[-1]), real(*args)))
+    table = make_table(0.75)
+    sheet = make_sheet(z=0.75)
+    make_igniter(sheet, (0.0, 0.0, 0.75), lit_from=1)
+    s = setup_bake(sheet, frames=3, cells=16, cache_dir=tmp_path, floor=False)
+    s.floor_mode, s.floor_object = "OBJECT", table
+    bpy.context.view_layer.objects.active = sheet
+    assert bpy.ops.thinburn.bake() == {"FINISHED"}
+    assert landed == [pytest.approx(0.75 + addon.inputs.FLOOR_CLEARANCE, abs=1e-6)]

@@ -11,7 +11,7 @@ import pytest
 bpy = pytest.importorskip("bpy")
 pytestmark = pytest.mark.blender
 
-from blender_helpers import make_igniter, make_sheet, setup_bake  # noqa: E402
+from blender_helpers import cache_file, make_igniter, make_sheet, setup_bake  # noqa: E402
 
 FRAMES = 12
 
@@ -40,7 +40,7 @@ def _read(path):
 
 def test_headless_bakes_are_bit_identical_and_a_failure_keeps_the_cache(addon, tmp_path):
     shot = _shot(tmp_path)
-    cache = tmp_path / "cache"
+    cache = tmp_path / "cache" / "shot"  # a folder per .blend
     first = _headless(shot, "--object", "Sheet")
     assert first.returncode == 0, first.stderr
     assert f"({FRAMES}/{FRAMES}, 100.0 %)" in first.stderr and "ETA" in first.stderr
@@ -52,7 +52,7 @@ def test_headless_bakes_are_bit_identical_and_a_failure_keeps_the_cache(addon, t
     bpy.ops.wm.open_mainfile(filepath=shot)
     sheet = bpy.data.objects["Sheet"]
     assert sheet.modifiers.get("ThinBurn Cache") is not None
-    assert sheet.thinburn.baked_file == "//cache/Sheet.pc2"
+    assert sheet.thinburn.baked_file == "//cache/shot/Sheet.pc2"
     assert "thinburn_ignite_time" in sheet.data.attributes
 
     # A second bake of the same .blend (a second machine) writes the same bytes.
@@ -66,7 +66,7 @@ def test_headless_bakes_are_bit_identical_and_a_failure_keeps_the_cache(addon, t
     sheet.thinburn.cache_dir = str(tmp_path / "ui")
     bpy.context.view_layer.objects.active = sheet
     assert bpy.ops.thinburn.bake() == {"FINISHED"}
-    assert _read(tmp_path / "ui" / "Sheet.pc2") == pc2
+    assert _read(tmp_path / "ui" / "shot" / "Sheet.pc2") == pc2
 
     # A failing bake: non-zero exit, the error's text, the previous cache and .blend untouched.
     bpy.ops.wm.open_mainfile(filepath=shot)
@@ -95,7 +95,7 @@ def test_headless_module_main_parses_args_after_the_double_dash(addon, tmp_path,
     with pytest.raises(SystemExit) as stop:
         headless.main()
     assert stop.value.code == 0
-    assert (tmp_path / "cache" / "Sheet.pc2").exists()
+    assert (tmp_path / "cache" / "shot" / "Sheet.pc2").exists()
     assert (tmp_path / "usd" / "Sheet.usda").exists()
 
 
@@ -109,7 +109,7 @@ def test_usd_export_of_a_baked_sheet(addon, tmp_path):
     assert {f"{addon.__name__}.usd_export", f"{addon.__name__}.scene_export"} <= menu  # File > Export
     path = str(tmp_path / "sheet.usda")
     assert bpy.ops.thinburn.export_usd(filepath=path) == {"FINISHED"}
-    head, samples = addon.cache.read_pc2(tmp_path / "cache" / "Sheet.pc2")
+    head, samples = addon.cache.read_pc2(cache_file(tmp_path / "cache", "Sheet.pc2"))
     stage = Usd.Stage.Open(path)
     assert stage.GetTimeCodesPerSecond() == bpy.context.scene.render.fps
     assert (stage.GetStartTimeCode(), stage.GetEndTimeCode()) == (1.0, 10.0)
@@ -149,7 +149,7 @@ def test_scene_export_bakes_outside_blender_as_the_addon_does(addon, tmp_path):
     ig.keyframe_insert("location", frame=6)
     setup_bake(sheet, frames=FRAMES, cells=16, cache_dir=tmp_path / "cache")
     assert bpy.ops.thinburn.bake() == {"FINISHED"}
-    _, pc2 = addon.cache.read_pc2(tmp_path / "cache" / "Sheet.pc2")
+    _, pc2 = addon.cache.read_pc2(cache_file(tmp_path / "cache", "Sheet.pc2"))
     path = addon.scene_export.write_scene(sheet, str(tmp_path / "scene.json"))
     spec = scenefile.load_scene(path)
     assert spec.frames == FRAMES and spec.cells == 16 and spec.floor == pytest.approx(0.0)
@@ -169,7 +169,7 @@ def test_a_bake_that_fails_midway_keeps_the_previous_cache_and_file(addon, tmp_p
     headless = importlib.import_module(f"{addon.__name__}.headless")
     shot = _shot(tmp_path)
     assert headless.bake_file(shot, stream=io.StringIO()) == 0
-    cache = tmp_path / "cache"
+    cache = tmp_path / "cache" / "shot"  # a folder per .blend
     pc2, stamp = _read(cache / "Sheet.pc2"), os.path.getmtime(shot)
     real_step, calls = thinburn.Simulation.step, []
 

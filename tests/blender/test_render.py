@@ -10,7 +10,7 @@ import pytest
 bpy = pytest.importorskip("bpy")
 pytestmark = pytest.mark.blender
 
-from blender_helpers import make_igniter, make_sheet, point_attribute, setup_bake  # noqa: E402
+from blender_helpers import cache_file, make_igniter, make_sheet, point_attribute, setup_bake  # noqa: E402
 
 LIT_FROM = 2
 BURN_S = 2.0  # burn duration: long enough that the render frame shows char, not holes
@@ -276,7 +276,7 @@ def test_ash_flakes_break_off_fall_flutter_and_land_on_the_floor(addon, tmp_path
     assert bpy.ops.thinburn.bake() == {"FINISHED"}
     flakes = bpy.data.objects["ThinBurn Ash Sheet"]
     n = len(flakes.data.polygons)
-    head, data = addon.cache.read_pc2(tmp_path / "cache" / "Sheet_ash.pc2")
+    head, data = addon.cache.read_pc2(cache_file(tmp_path / "cache", "Sheet_ash.pc2"))
     assert n >= 3 and head["points"] == 4 * n and head["samples"] == 48
     centres = data.reshape(48, n, 4, 3).mean(axis=2)  # (frames, flakes, 3)
     sizes = np.ptp(data.reshape(48, n, 4, 3), axis=2).max(axis=2)
@@ -289,7 +289,7 @@ def test_ash_flakes_break_off_fall_flutter_and_land_on_the_floor(addon, tmp_path
     assert z[0] == pytest.approx(0.1, abs=0.01)        # it starts at the sheet
     assert np.all(np.diff(z) <= 1e-6) and z[-1] == pytest.approx(0.0005, abs=1e-4)  # falls, lands
     assert np.ptp(centres[broke[k]:, k, :2], axis=0).max() > 0.002  # and drifts sideways
-    _, sheet_positions = addon.cache.read_pc2(tmp_path / "cache" / "Sheet.pc2")  # identity transform
+    _, sheet_positions = addon.cache.read_pc2(cache_file(tmp_path / "cache", "Sheet.pc2"))  # identity transform
     again, count = addon.fire.flake_frames(
         sheet_positions, [list(p.vertices) for p in sheet.data.polygons],
         point_attribute(sheet, "thinburn_burnout_time") - 1.0, 1 / 24, 0.5, seed=0, floor=0.0)
