@@ -18,6 +18,9 @@ constexpr int kRings = 3;            // candidate couples: this many rings of th
 constexpr double kWindow = 1.8;      // window radius R in spacings: about 9 couples inside
 constexpr long kPointCost = 24;      // one point's deform, in kParallelWork units
 constexpr int kS = SurfaceEmbedding::kStencil;
+// Ridge on the MLS's normal term, per unit window: couples spread across the normal by more
+// than about sqrt(kNormalRidge) R make the weights reproduce linear fields in 3-D.
+constexpr double kNormalRidge = 1e-4;
 
 // Wendland's C2 window: 1 at q = 0, 0 with zero first and second derivatives at q = 1.
 double wendland(double q) {
@@ -101,6 +104,22 @@ void ControlSurface::build_topology() {
   }
 }
 
+double ControlSurface::edge_curvature(double quantile) const {
+  const auto& pos = coarse_->positions();
+  const auto& nrm = coarse_->normals();
+  std::vector<double> k;
+  for (int s = 0; s < topo_.springs(); ++s) {
+    if (topo_.kind[s] != 0 || (topo_.spring_a[s] & 1)) continue;  // structure springs of the bottom layer: the edges
+    const int a = topo_.spring_a[s] / 2, b = topo_.spring_b[s] / 2;
+    const double len = (pos[a] - pos[b]).norm();
+    if (len > 0) k.push_back(std::acos(std::clamp(nrm[a].dot(nrm[b]), -1.0, 1.0)) / len);
+  }
+  if (k.empty()) return 0.0;
+  const std::size_t at = std::min(k.size() - 1, static_cast<std::size_t>(quantile * (k.size() - 1)));
+  std::nth_element(k.begin(), k.begin() + at, k.end());
+  return k[at];
+}
+
 void ControlSurface::gather(int start, std::vector<int>& out, std::vector<int>& stamp, int& id) const {
   // The couples within kRings edges of `start`, breadth-first.
   ++id;
@@ -162,19 +181,23 @@ SurfaceEmbedding ControlSurface::embed(const RowMatX3& points) const {
       nx += phi * nrm[c];
     }
     nx = nx.norm() > 0 ? Eigen::Vector3d(nx.normalized()) : nrm[c0];
-    // Linear MLS in the tangent plane at x: w_k = phi_k [1 0 0] A^-1 p_k, p_k = (1, t1.(y_k - x),
-    // t2.(y_k - x)), A = sum phi_k p_k p_k^T. Shepard's weights where A is singular (collinear couples).
-    Eigen::Vector3d t1 = nx.unitOrthogonal(), t2 = nx.cross(t1);
-    Eigen::Matrix3d A = Eigen::Matrix3d::Zero();
-    std::vector<Eigen::Vector3d> pk(win.size());
+    // Linear MLS: w_k = phi_k [1 0 0 0] A^-1 p_k, p_k = (1, t1.d_k, t2.d_k, n.d_k) / R with d_k =
+    // y_k - x in x's frame (t1, t2, n), A = sum phi_k p_k p_k^T + ridge on the normal term. Where
+    // the couples spread across the normal (a curve, a crease) the weights reproduce any linear
+    // field in 3-D, so a turning or tumbling shell moves rigidly; on a flat patch the ridge leaves
+    // the tangent-plane MLS. Shepard's weights where even that is singular (collinear couples).
+    const Eigen::Vector3d t1 = nx.unitOrthogonal(), t2 = nx.cross(t1);
+    Eigen::Matrix4d A = Eigen::Matrix4d::Zero();
+    std::vector<Eigen::Vector4d> pk(win.size());
     for (std::size_t q = 0; q < win.size(); ++q) {
-      const Eigen::Vector3d d = pos[win[q].second] - x;
-      pk[q] = Eigen::Vector3d(1.0, d.dot(t1) / R, d.dot(t2) / R);
+      const Eigen::Vector3d d = (pos[win[q].second] - x) / R;
+      pk[q] = Eigen::Vector4d(1.0, d.dot(t1), d.dot(t2), d.dot(nx));
       A += win[q].first * pk[q] * pk[q].transpose();
     }
-    const Eigen::FullPivLU<Eigen::Matrix3d> lu(A);
-    const bool mls = win.size() >= 3 && lu.rcond() > 1e-8;
-    const Eigen::Vector3d row = mls ? Eigen::Vector3d(lu.solve(Eigen::Vector3d::UnitX())) : Eigen::Vector3d::Zero();
+    A(3, 3) += kNormalRidge * total;
+    const Eigen::FullPivLU<Eigen::Matrix4d> lu(A);
+    const bool mls = win.size() >= 3 && lu.rcond() > 1e-10;
+    const Eigen::Vector4d row = mls ? Eigen::Vector4d(lu.solve(Eigen::Vector4d::UnitX())) : Eigen::Vector4d::Zero();
     Eigen::Vector3d mid0 = Eigen::Vector3d::Zero(), n0 = Eigen::Vector3d::Zero();
     for (std::size_t q = 0; q < win.size(); ++q) {
       const std::size_t slot = std::size_t(i) * kS + q;

@@ -12,9 +12,10 @@
 ///
 /// Embedding. A point x gets weights over the couples within R of it (3 rings of its nearest
 /// couple on the control surface, so the far side of a fold or another piece never counts):
-/// moving least squares, linear in x's tangent plane, with Wendland C2 window functions. The
-/// weights sum to 1, reproduce linear motion of the layer exactly and are C2 in x, so a fine
-/// mesh shows no lattice facets. A point follows the mid-surface's displacement, plus its rest
+/// moving least squares, linear in 3-D (with a ridge on the normal term, which leaves the
+/// tangent-plane MLS where the couples are flat), with Wendland C2 window functions. The
+/// weights sum to 1, reproduce linear motion of the layer (a rigid turn too) and are C2 in x,
+/// so a fine mesh shows no lattice facets. A point follows the mid-surface's displacement, plus its rest
 /// offset along the layer's interpolated normal turned with the layer: a curved shell's points,
 /// which lie off the couples' interpolated mid-surface by the sag of the curve, stay at that
 /// offset across the layer as it bends.
@@ -58,6 +59,9 @@ class ControlSurface {
   const LatticeTopology& topology() const { return topo_; }
   const SurfaceCells& cells() const { return *coarse_; }
 
+  /// @brief How strongly the shell curves at this spacing: the given quantile (0..1) over the
+  /// control surface's edges of the angle between their ends' normals over their length (1/m).
+  double edge_curvature(double quantile) const;
   /// @brief Embed rest points lying on (or near) the shell.
   SurfaceEmbedding embed(const RowMatX3& points) const;
   /// @brief Deformed positions of all embedded points from the lattice's control positions;

@@ -220,6 +220,11 @@ void ShellCells::ignite(int cell, double t0, const SpreadLaw& law, const CellVie
   front_.ignite_cell(cell, t0, speed_fn(law, view));
 }
 
+void ShellCells::ignite_point(int cell, const Eigen::Vector3d& offset, double t0, const SpreadLaw& law,
+                              const CellView& view) {
+  front_.ignite_point(rest(cell) + offset, t0, speed_fn(law, view));
+}
+
 const std::vector<int>& ShellCells::advance(double t_end, const SpreadLaw& law, const CellView& view) {
   return front_.advance(t_end, speed_fn(law, view));
 }

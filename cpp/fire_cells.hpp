@@ -71,6 +71,13 @@ class FireCells {
 
   /// @brief Ignite cell c at time t0 (>= front_time()).
   virtual void ignite(int c, double t0, const SpreadLaw& law, const CellView& view) = 0;
+  /// @brief Ignite the point `offset` (world axes, m) away from cell c's centre now; the grid
+  /// lights the cell itself, as the paper's cellular rule does.
+  virtual void ignite_point(int c, const Eigen::Vector3d& offset, double t0, const SpreadLaw& law,
+                            const CellView& view) {
+    (void)offset;
+    ignite(c, t0, law, view);
+  }
   /// @brief Accept, in time order, every cell whose arrival time is <= t_end.
   virtual const std::vector<int>& advance(double t_end, const SpreadLaw& law, const CellView& view) = 0;
   virtual const std::vector<double>& arrival() const = 0;
@@ -142,6 +149,11 @@ class ShellCells final : public FireCells {
   double grad2(int c, const CellView& view) const override;
   bool on_fringe(int c, const std::vector<std::uint8_t>& state) const override;
   void ignite(int c, double t0, const SpreadLaw& law, const CellView& view) override;
+  /// The point carried to the rest surface by the cell's own displacement, then projected on
+  /// the nearest cell's tangent plane there (SurfaceFront::ignite_point): a source between
+  /// cells is not snapped to one.
+  void ignite_point(int c, const Eigen::Vector3d& offset, double t0, const SpreadLaw& law,
+                    const CellView& view) override;
   const std::vector<int>& advance(double t_end, const SpreadLaw& law, const CellView& view) override;
   const std::vector<double>& arrival() const override { return front_.arrival(); }
   std::size_t num_trial() const override { return front_.num_trial(); }

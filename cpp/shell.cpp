@@ -64,6 +64,18 @@ Shell::Shell(const SurfaceCells& cells, const RowMatX3& vertices, const RowMatX3
   if (params_.lattice == 1) throw std::invalid_argument("lattice must be >= 2");
   thickness_ = params_.lattice_thickness > 0 ? params_.lattice_thickness : 0.25 * spacing;
   control_ = std::make_unique<ControlSurface>(vertices, faces, spacing, thickness_);
+  // A chosen lattice also follows the curve: at most kMaxTurn radians between neighbouring
+  // couples' normals over most edges (a lantern of r = 10 cm gets about 16 couples round, not
+  // 6; a crease alone does not refine), at most kMaxRefine times finer than the grid's choice.
+  constexpr double kMaxTurn = 0.4, kCurvedEdges = 0.9, kMaxRefine = 4.0;
+  const double coarsest = spacing;
+  for (int pass = 0; params_.lattice == 0 && pass < 3; ++pass) {
+    const double kappa = control_->edge_curvature(kCurvedEdges);
+    if (!(kappa * spacing > 1.15 * kMaxTurn) || spacing <= coarsest / kMaxRefine * 1.0001) break;
+    spacing = std::max(kMaxTurn / kappa, coarsest / kMaxRefine);
+    thickness_ = params_.lattice_thickness > 0 ? params_.lattice_thickness : 0.25 * spacing;
+    control_ = std::make_unique<ControlSurface>(vertices, faces, spacing, thickness_);
+  }
   lattice_ = std::make_unique<FfdLattice>(FfdLattice::on_surface(control_->couples(), control_->rest()));
   surface_vertices_ = control_->embed(vertices);
   RowMatX3 centres(cells.size(), 3);

@@ -179,7 +179,10 @@ int Simulation::ignite(const Eigen::Vector3d& point, double t, double radius) {
   // last step is taken as that step's end: the fire starts now and catches up from there.
   const double t0 = std::max(t, cells_->front_time());
   refresh_law();
-  for (int c : lit) cells_->ignite(c, t0, law_, view_);
+  if (radius == 0.0 && lit.size() == 1)
+    cells_->ignite_point(lit[0], point - cell_position(lit[0]), t0, law_, view_);
+  else
+    for (int c : lit) cells_->ignite(c, t0, law_, view_);
   return static_cast<int>(lit.size());
 }
 
