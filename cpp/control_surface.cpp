@@ -14,8 +14,8 @@
 namespace thinburn {
 namespace {
 
-constexpr int kRings = 3;            // candidate couples: this many rings of the nearest one
-constexpr double kWindow = 1.8;      // window radius R in spacings: about 9 couples inside
+constexpr int kRings = 4;            // candidate couples: this many rings of the nearest one
+constexpr double kWindow = 2.0;      // window radius R in spacings: 11-15 couples inside (1.5 left ill-conditioned weights: 27 degree kinks)
 constexpr long kPointCost = 24;      // one point's deform, in kParallelWork units
 constexpr int kS = SurfaceEmbedding::kStencil;
 // Ridge on the MLS's normal term, per unit window: couples spread across the normal by more

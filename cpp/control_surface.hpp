@@ -33,7 +33,7 @@ namespace thinburn {
 
 /// @brief Points embedded in a control surface's lattice.
 struct SurfaceEmbedding {
-  static constexpr int kStencil = 12;  ///< couples per point (unused slots: weight 0)
+  static constexpr int kStencil = 24;  ///< couples per point (unused slots: weight 0)
   std::vector<std::int32_t> couple;    ///< n * kStencil couple indices
   std::vector<double> weight;          ///< n * kStencil MLS weights (sum 1; may be < 0)
   std::vector<double> share;           ///< n * kStencil window shares (>= 0, sum 1): mass, area, pins
