@@ -68,8 +68,8 @@ def test_a_cone_burns_by_its_unrolled_distance():
     src = np.array([0.2 * 0.6, 0.0, 0.3 * 0.6])
     sim.ignite(src)
     sim.run(200.0, dt=2.0)
-    # Measured 0.68 % max beyond 3 cells (wrapping round the cut-away apex included).
-    assert _arrival_error(sim, src, S.cone_exact) < 0.009
+    # Measured 0.89 % max beyond 3 cells (wrapping round the cut-away apex included).
+    assert _arrival_error(sim, src, S.cone_exact) < 0.0095
 
 
 def test_a_flat_sheet_on_the_surface_matches_the_grid():
