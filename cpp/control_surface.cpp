@@ -65,6 +65,13 @@ void ControlSurface::build_topology() {
       const int a = t[k], b = t[(k + 1) % 3];
       edges[{std::min(a, b), std::max(a, b)}].push_back(t[(k + 2) % 3]);
     }
+  // Neighbouring regions that share no control triangle (a strip one triangle wide, a rim)
+  // are joined too: an edge with no opposite corner.
+  const auto& off = coarse_->nbr_offset();
+  const auto& idx = coarse_->nbr_index();
+  for (int c = 0; c < C; ++c)
+    for (int q = off[c]; q < off[c + 1]; ++q)
+      if (idx[q] != c) edges.try_emplace({std::min(c, idx[q]), std::max(c, idx[q])});
   std::vector<std::pair<int, int>> flex;
   for (const auto& [e, opp] : edges)
     if (opp.size() == 2 && opp[0] != opp[1]) flex.push_back({std::min(opp[0], opp[1]), std::max(opp[0], opp[1])});

@@ -28,6 +28,8 @@ constexpr int kSleepShare = 10;  // vertices fall asleep only when over 1/10 of 
 constexpr int kMaxHold = 10000;  // steps: the longest flicker hold (and wake_hold's upper bound)
 constexpr int kMaxContactRounds = 8;  // solves per implicit substep while contacts are added
 constexpr double kPi = 3.14159265358979323846;
+// A couple whose D changes by this much across its spacing curls across the front only.
+constexpr double kAnisotropicTurn = 0.25;
 
 void require(bool ok, const std::string& what) {
   if (!ok) throw std::invalid_argument(what);
@@ -233,14 +235,50 @@ double LatticeDynamics::bimetal_ratio(int s, double kappa) const {
 
 void LatticeDynamics::apply_bimetal(const Eigen::VectorXd& D, bool all) {
   // Rest lengths are a function of D alone (not of the path), so the springs never carry the
-  // history of earlier crumples; only springs touching a couple whose D changed are recomputed.
+  // history of earlier crumples; only springs near a couple whose D changed are recomputed.
+  //
+  // The curl bends across the fire's front, not equally every way: a heated face shrinking
+  // alike in all directions wants a dome, which a sheet cannot take without stretching, so
+  // paper rolls about lines along the burning edge instead. A spring along unit direction u
+  // takes the curvature times (u . g)^2, g the direction in which D grows (a couple's D
+  // gradient); where D is flat across a couple (|grad D| spacing << kAnisotropicTurn) the
+  // factor blends to 1/2, the mean over directions.
+  const int C = topo_.couples;
+  if (grad_dir_.rows() != C) grad_dir_ = RowMatX3::Zero(C, 3), grad_share_ = Eigen::VectorXd::Zero(C);
+  if (changed_.size() != static_cast<std::size_t>(C)) changed_.assign(C, 0);
+  const RowMatX3& r = lat_.rest();
+  auto centre = [&](int c) { return Eigen::Vector3d(0.5 * (r.row(2 * c) + r.row(2 * c + 1)).transpose()); };
+  for (int c = 0; c < C; ++c) {
+    bool near = all || delta_(c) != 0.0;
+    for (int q = topo_.nbr_offset[c]; q < topo_.nbr_offset[c + 1] && !near; ++q) near = delta_(topo_.nbr_index[q]) != 0.0;
+    changed_[c] = near;
+    if (!near) continue;
+    Eigen::Vector3d g = Eigen::Vector3d::Zero();
+    for (int q = topo_.nbr_offset[c]; q < topo_.nbr_offset[c + 1]; ++q) {
+      const int o = topo_.nbr_index[q];
+      const Eigen::Vector3d e = centre(o) - centre(c);
+      const double l2 = e.squaredNorm();
+      if (l2 > 0) g += (D(o) - D(c)) * e / l2;
+    }
+    const double k = topo_.nbr_offset[c + 1] - topo_.nbr_offset[c];
+    const double slope = k > 0 ? 2.0 * g.norm() / k : 0.0;  // |grad D| (rad/m), averaged over axes
+    grad_share_(c) = std::min(1.0, slope * couple_spacing_(c) / kAnisotropicTurn);
+    grad_dir_.row(c) = g.norm() > 0 ? Eigen::RowVector3d(g.normalized().transpose()) : Eigen::RowVector3d::Zero();
+  }
+  auto factor = [&](int c, const Eigen::Vector3d& u) {
+    const double along = u.dot(grad_dir_.row(c).transpose());
+    return grad_share_(c) * along * along + (1.0 - grad_share_(c)) * 0.5;
+  };
   const int ns = static_cast<int>(sa_.size());
   parallel_for(0, ns, kRowCost, [&](long s_) {
     const int s = static_cast<int>(s_);
     const int ca = sa_[s] / 2, cb = sb_[s] / 2;
     if (ca == cb) return;  // a couple's own thickness spring keeps its length
-    if (!all && delta_(ca) == 0.0 && delta_(cb) == 0.0) return;
-    const double kappa = 0.5 * p_.crumple_gain * (D(ca) / couple_spacing_(ca) + D(cb) / couple_spacing_(cb));
+    if (!changed_[ca] && !changed_[cb]) return;
+    Eigen::Vector3d u = centre(cb) - centre(ca);
+    u = u.norm() > 0 ? Eigen::Vector3d(u.normalized()) : u;
+    const double f = p_.anisotropic_curl ? 0.5 * (factor(ca, u) + factor(cb, u)) : 1.0;
+    const double kappa = 0.5 * p_.crumple_gain * f * (D(ca) / couple_spacing_(ca) + D(cb) / couple_spacing_(cb));
     rest_len_[s] = base_len_[s] * bimetal_ratio(s, kappa);
   });
 }
@@ -311,13 +349,13 @@ void LatticeDynamics::set_params(const DynamicsParams& p) {
       o.friction != p.friction || o.integrator != p.integrator || o.sleeping != p.sleeping ||
       o.sleep_speed != p.sleep_speed || o.bimetal != p.bimetal ||
       (p.bimetal && o.crumple_gain != p.crumple_gain);
-  if (p.bimetal && (!o.bimetal || o.crumple_gain != p.crumple_gain)) bimetal_all_ = true;
+  if (p.bimetal && (!o.bimetal || o.crumple_gain != p.crumple_gain || o.anisotropic_curl != p.anisotropic_curl)) bimetal_all_ = true;
   p_ = p;
   if (moved) std::fill(awake_.begin(), awake_.end(), 1);
 }
 
 LatticeDynamics::Checkpoint LatticeDynamics::checkpoint() const {
-  return Checkpoint{mass_, strength_, spring_scale_, awake_, hold_, hold_len_, vel_, accel_, wind_};
+  return Checkpoint{mass_, strength_, spring_scale_, awake_, hold_, hold_len_, vel_, accel_, wind_, grad_dir_, grad_share_};
 }
 
 void LatticeDynamics::rollback(Checkpoint&& c) {
@@ -329,6 +367,8 @@ void LatticeDynamics::rollback(Checkpoint&& c) {
   hold_len_ = std::move(c.hold_len);
   vel_ = std::move(c.vel);
   accel_ = std::move(c.accel);
+  grad_dir_ = std::move(c.grad_dir);
+  grad_share_ = std::move(c.grad_share);
   wind_ = c.wind;
 }
 

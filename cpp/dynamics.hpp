@@ -55,6 +55,7 @@ struct DynamicsParams {
   double plasticity = 1.0;     ///< in [0, 1]: share of each crumple that the springs' rest lengths keep
   bool crumple_momentum = false;  ///< remove the crumple's net translation (it may bend, not move, the sheet)
   bool bimetal = false;        ///< D shrinks the heated face's springs (curvature gain * D / spacing); false: Fig. 5's prescribed chord motion
+  bool anisotropic_curl = false;  ///< bimetal: the curl bends across the front (along grad D) only, not as a dome
   double sleep_speed = 1e-4;   ///< m/s: slower vertices, unforced, may sleep
   bool sleeping = true;        ///< false: every free vertex integrates every step
   /// Steps a flickering vertex stays awake: one that its neighbours' motion woke within this
@@ -145,6 +146,8 @@ class LatticeDynamics {
     std::vector<std::uint16_t> hold, hold_len;
     RowMatX3 vel, accel;
     Eigen::Vector3d wind;
+    RowMatX3 grad_dir;
+    Eigen::VectorXd grad_share;
   };
   Checkpoint checkpoint() const;
   void rollback(Checkpoint&& c);
@@ -229,6 +232,9 @@ class LatticeDynamics {
   std::vector<double> mid_sep_;       // per spring: rest distance between its couples' centres
   std::vector<double> off_a_, off_b_; // per spring: its ends' offsets from the mid-surface (+ top)
   Eigen::VectorXd couple_spacing_;    // per couple: mean rest distance to its axis neighbours
+  RowMatX3 grad_dir_;                 // per couple: unit direction in which D grows (rest frame)
+  Eigen::VectorXd grad_share_;        // per couple: how much of the curl follows it (0: isotropic)
+  std::vector<std::uint8_t> changed_; // per couple: its springs' rest lengths are recomputed this step
   bool bimetal_all_ = true;           // the next bimetal step recomputes every spring
   std::vector<int> inc_start_, inc_spring_, inc_other_;
   std::vector<int> vert_spring_;    // per couple: its top-bottom spring

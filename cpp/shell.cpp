@@ -8,6 +8,7 @@
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <string>
 
 namespace thinburn {
 namespace {
@@ -63,7 +64,19 @@ Shell::Shell(const SurfaceCells& cells, const RowMatX3& vertices, const RowMatX3
                                        : std::clamp(std::max(16.0 * cells.spacing(), 0.02), side / 64.0, side / 3.0);
   if (params_.lattice == 1) throw std::invalid_argument("lattice must be >= 2");
   thickness_ = params_.lattice_thickness > 0 ? params_.lattice_thickness : 0.25 * spacing;
-  control_ = std::make_unique<ControlSurface>(vertices, faces, spacing, thickness_);
+  // A chosen lattice that leaves a piece without a triangulated control surface (a small piece,
+  // a mesh of two triangles) gets finer until it has one; an explicit one is refused by name.
+  constexpr int kFinerTries = 6;
+  for (int attempt = 0;; ++attempt) {
+    try {
+      control_ = std::make_unique<ControlSurface>(vertices, faces, spacing, thickness_);
+      break;
+    } catch (const std::invalid_argument& e) {
+      if (params_.lattice > 0 || attempt == kFinerTries || std::string(e.what()).rfind("lattice", 0) != 0) throw;
+      spacing *= 0.6;
+      if (params_.lattice_thickness <= 0) thickness_ = 0.25 * spacing;
+    }
+  }
   // A chosen lattice also follows the curve: at most kMaxTurn radians between neighbouring
   // couples' normals over most edges (a lantern of r = 10 cm gets about 16 couples round, not
   // 6; a crease alone does not refine), at most kMaxRefine times finer than the grid's choice.

@@ -118,15 +118,18 @@ def test_burnt_sheet_keeps_ash_strength_of_the_lattice_stiffness(square):
 
 def test_pyrolysis_does_not_depend_on_the_grid(a4):
     # Eq 3 sums over burning cells; weighted by their share of a paper (128²) cell, the same
-    # fire gives the same field at any N (the lattice is held at 9 so the targets are the same).
-    means = []
+    # burning area gives the same field at any N (the lattice is held at 9 and flat, crumple
+    # off, so the targets are the same). The lit disc's area itself differs by 8 % between the
+    # grids, so the field is compared per unit burning area: measured within 0.1 %.
+    per_area = []
     for N in (64, 128, 256):
-        sim = thinburn.Simulation(*a4, cells=N, lattice=9, floor=0.0, **QUIET)
+        sim = thinburn.Simulation(*a4, cells=N, lattice=9, floor=0.0, crumple_gain=0.0, **QUIET)
         sim.ignite((0.05, 0.05, 0.0), radius=0.02)
         sim.run(2.0, dt=1 / 24)
-        means.append(sim.pyrolysis().mean())
-    assert min(means) > 0
-    assert max(means) / min(means) < 1.05
+        burning_paper_cells = (sim.cell_states() == 1).sum() * (128 / N) ** 2
+        per_area.append(sim.pyrolysis().mean() / burning_paper_cells)
+    assert min(per_area) > 0
+    assert max(per_area) / min(per_area) < 1.005
 
 
 def test_wake_hold_cuts_redone_steps_on_a_held_cloth():

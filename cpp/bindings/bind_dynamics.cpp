@@ -64,7 +64,8 @@ void apply_kwargs(DynamicsParams& p, const py::kwargs& kw) {
                                              : nullptr;
     bool* bfield = k == "has_floor" ? &p.has_floor : k == "sleeping" ? &p.sleeping
                    : k == "crumple_momentum" ? &p.crumple_momentum
-                   : k == "bimetal" ? &p.bimetal : nullptr;
+                   : k == "bimetal" ? &p.bimetal
+                   : k == "anisotropic_curl" ? &p.anisotropic_curl : nullptr;
     int* ifield = k == "substeps"            ? &p.substeps
                   : k == "max_substeps"      ? &p.max_substeps
                   : k == "cg_max_iterations" ? &p.cg_max_iterations
@@ -102,7 +103,7 @@ py::dict params_dict(const DynamicsParams& p) {
                   "has_floor"_a = p.has_floor, "floor_z"_a = p.floor_z, "friction"_a = p.friction,
                   "integrator"_a = names[int(p.integrator)], "crumple_gain"_a = p.crumple_gain,
                   "plasticity"_a = p.plasticity, "crumple_momentum"_a = p.crumple_momentum,
-                  "bimetal"_a = p.bimetal,
+                  "bimetal"_a = p.bimetal, "anisotropic_curl"_a = p.anisotropic_curl,
                   "sleep_speed"_a = p.sleep_speed,
                   "sleeping"_a = p.sleeping, "substeps"_a = p.substeps,
                   "max_substeps"_a = p.max_substeps, "safety"_a = p.safety,
