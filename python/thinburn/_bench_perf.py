@@ -22,6 +22,7 @@ import time
 import numpy as np
 
 from . import _core
+from .simulation import Simulation
 from ._threads import measure_memory_bandwidth
 from .demo import build, default_scene
 from .lattice import flat_rest
@@ -223,6 +224,54 @@ def bench_frames(materials, cells, frames, warmup, vertex_counts, repeat, thread
                     f"ms/frame {s['frames_per_second']:7.1f} frames/s awake={s['awake']:.0f} "
                     f"particles={s['particles']:.0f} cg={s['cg_iterations']:.0f}")
     rows.append(dict(PAPER_REFERENCE))
+    return rows
+
+
+# ---------------------------------------------------------------- shells
+
+
+def shell_scenes(target=16000):
+    """Curved shells with about `target` vertices (issue #11): a lantern standing on a table
+    lit on its side, a sphere pinned at its top lit on its equator, an A4 letter folded at 30
+    degrees on a table lit at a corner. (name, vertices, faces, ignite at, Simulation keywords)."""
+    from . import _surface_shapes as shapes
+    from .scenes import rect_sheet
+
+    nz = max(4, int(round(np.sqrt(target / 3.0))))
+    lantern = shapes.cylinder(0.1, 0.3, nt=3 * nz, nz=nz - 1)
+    level = int(np.clip(round(np.log(target / 12.0) / np.log(4.0)), 2, 7))
+    sphere = shapes.icosphere(level, 0.1)
+    nx = max(4, int(round(np.sqrt(target * 0.707))))
+    v, f = rect_sheet(0.21, 0.297, nx=nx, ny=int(round(nx * 1.414)))
+    m = v[:, 0] > 0.105
+    d = v[m, 0] - 0.105
+    v[m, 0], v[m, 2] = 0.105 + d * np.cos(np.radians(150)), d * np.sin(np.radians(150))
+    return [
+        ("lantern", *lantern, (0.1, 0.0, 0.15), dict(floor=0.0)),
+        ("sphere", *sphere, (0.1, 0.0, 0.0), dict(pinned=np.flatnonzero(sphere[0][:, 2] > 0.0995))),
+        ("letter", v, f, (0.0, 0.0, 0.0), dict(floor=0.0)),
+    ]
+
+
+def bench_shells(cells, frames, warmup, repeat, threads, log, target=16000):
+    """Frames per second of the curved shells (geometry "surface"), beside the flat demo."""
+    rows = []
+    for name, V, F, at, kw in shell_scenes(target):
+        def make(V=V, F=F, at=at, kw=kw):
+            sim = Simulation(V, F, cells=cells, threads=threads, **kw)
+            sim.ignite(at, time=0.0)
+            return sim
+        t0 = time.perf_counter()
+        probe = make()
+        build_s = time.perf_counter() - t0
+        step_ms, pos_ms, stats, sim = best_frames(make, frames, warmup, repeat)
+        s = frame_summary(step_ms, pos_ms, stats)
+        rows.append(dict(part="shells", method=name, resolution=cells, vertices=int(len(V)),
+                         cells=int(probe.num_cells), couples=int(probe.lattice_couples), geometry=probe.geometry,
+                         threads=sim.threads, build_seconds=build_s, warmup_frames=warmup, **s))
+        log(f"shells      {name:8s} {len(V):6d} vertices {probe.num_cells:6d} cells {probe.lattice_couples:4d} "
+            f"couples (build {build_s:5.2f} s) {s['ms_per_frame']:7.2f} ms/frame {s['frames_per_second']:7.1f} frames/s "
+            f"awake={s['awake']:.0f}")
     return rows
 
 
@@ -532,5 +581,5 @@ def save_figure(fig, path) -> None:
     _pyplot().close(fig)
 
 
-PERF_PARTS = ("ffd", "frames", "scaling", "active")
+PERF_PARTS = ("ffd", "frames", "shells", "scaling", "active")
 ALL_MATERIALS = tuple(MATERIALS)

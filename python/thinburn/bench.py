@@ -407,6 +407,8 @@ def run_perf_parts(parts, quick, repeat, threads, log):
         counts = [threads] if quick else sorted({1, threads}, reverse=True)
         rows += perf.bench_frames(perf.ALL_MATERIALS, 128, 24 if quick else 120, 48, [None, 16000],
                                   frame_repeat, counts, log)
+    if "shells" in parts:
+        rows += perf.bench_shells(128, 24 if quick else 96, 48, frame_repeat, threads, log)
     if "scaling" in parts:
         cells = [64, 128, 256] + ([] if quick else [512, 1024])
         verts = [1000, 10000, 100000] + ([] if quick else [1000000])
