@@ -191,8 +191,11 @@ class SceneRenderer:
         colours = np.column_stack([face_rgb, alpha])[order]
         if shells:
             # Edges in the face colour close the anti-aliasing seams that let the far wall of a
-            # closed shell show through its near wall as a grid of dots.
-            coll = Poly3DCollection(tris[order], facecolors=colours, edgecolors=colours,
+            # closed shell show through its near wall as a grid of dots; ash faces get none
+            # (their overlapping faint edges would draw a wireframe).
+            edges = colours.copy()
+            edges[gone[order], 3] = 0.0
+            coll = Poly3DCollection(tris[order], facecolors=colours, edgecolors=edges,
                                     linewidths=0.4, zorder=1)
         else:
             coll = Poly3DCollection(tris[order], facecolors=colours, linewidths=0, zorder=1)
