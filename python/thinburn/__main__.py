@@ -13,8 +13,14 @@ def _parser() -> argparse.ArgumentParser:
     sub = p.add_subparsers(dest="command", required=True)
     d = sub.add_parser("demo", help="burn a built-in scene: an A4 sheet on a table lit at a corner "
                                     "(paper, hard_paper), a cloth held at its corners (cloth, silk), "
-                                    "a curtain in wind (curtain)")
+                                    "a curtain in wind (curtain); --scene lantern|sphere|letter "
+                                    "burns a curved shell instead")
     d.add_argument("--material", default="paper", choices=sorted(MATERIALS))
+    d.add_argument("--scene", default=None, choices=["lantern", "sphere", "letter"],
+                   help="a curved shell instead of the material's own scene: a paper lantern "
+                        "(open cylinder r = 10 cm, h = 30 cm) on a table lit on its side, a sphere "
+                        "(r = 10 cm) on a table lit on its equator, or an A4 sheet folded at 30 "
+                        "degrees on a table; burnt with --material (default paper)")
     d.add_argument("--cells", type=int, default=128, help="N: cells per side (default 128)")
     d.add_argument("--fps", type=float, default=24.0, help="simulation steps per second")
     d.add_argument("--frames", type=int, default=60, help="pictures to write (default 60)")
@@ -39,10 +45,14 @@ def main(argv=None) -> int:
         if args.frames < 1 or args.fps <= 0 or args.max_time <= 0:
             print("error: --frames, --fps and --max-time must be positive", file=sys.stderr)
             return 2
-        out = args.out or os.path.join("thinburn_out", f"demo_{args.material}")
+        if args.scene is None:
+            name = f"demo_{args.material}"
+        else:
+            name = f"demo_{args.scene}" + ("" if args.material == "paper" else f"_{args.material}")
+        out = args.out or os.path.join("thinburn_out", name)
         print(f"thinburn demo: writing to {os.path.abspath(out)}", file=sys.stderr)
         s = run_demo(out, args.material, args.cells, args.fps, args.max_time, args.frames,
-                     args.seed, args.threads, args.quiet)
+                     args.seed, args.threads, args.quiet, scene=args.scene)
         print(f"done: {s['simulated_seconds']} s simulated in {s['wall_seconds']} s "
               f"({s['simulated_frames_per_second']} simulated frames/s, drawing excluded); "
               f"{s['frames_written']} frames, "

@@ -11,7 +11,7 @@ import numpy as np
 from . import _validate as V
 from . import render
 from ._progress import Progress
-from .scenes import A4, rect_sheet
+from .scenes import A4, folded_sheet, lantern, rect_sheet, sphere
 from .simulation import Simulation
 
 
@@ -29,6 +29,16 @@ class Scene:
     wind: tuple = (0.0, 0.0, 0.0)
     params: dict = field(default_factory=dict)
     view_pad: float = 0.35  # room around the sheet in the 3-D view, in sheet sizes
+    view: tuple = (32.0, -58.0)  # (elevation, azimuth) of the 3-D view, degrees
+    # A second 3-D view in place of the top view of the grid cells (shells on their own
+    # surface have no grid): (elevation, azimuth), and a label per view.
+    second_view: tuple | None = None
+    labels: tuple = ("", "")
+    name: str = ""  # the --scene name; "" for a material's default scene
+
+
+# Curved shells (issue #11): their cells lie on the surface itself (Simulation geometry "surface").
+SHELL_SCENES = ("lantern", "sphere", "letter")
 
 
 def default_scene(material="paper", vertices=None) -> Scene:
@@ -64,6 +74,34 @@ def default_scene(material="paper", vertices=None) -> Scene:
                  (0.004, 0.004, 0.0), 0.006, floor=0.0)
 
 
+def shell_scene(name: str) -> Scene:
+    """A curved shell, burnt on its own surface (issue #11).
+
+    lantern: an open paper cylinder, r = 10 cm, h = 30 cm, standing on a table, lit at one
+    point half-way up its side (+x); the far side catches last, after about pi r / V0.
+    sphere: a paper sphere, r = 10 cm, resting on a table, lit on its equator (+x).
+    letter: an A4 sheet folded across its middle, one half on a table, the other raised at
+    30 degrees, lit at the far corner of the flat half; the fire crosses the fold and climbs.
+    """
+    name = V.choice(name, "scene", SHELL_SCENES)
+    if name == "lantern":
+        v, f = lantern(0.1, 0.3, segments=128, rings=60)
+        return Scene("paper lantern (open cylinder r = 10 cm, h = 30 cm) standing on a table, "
+                     "lit half-way up its side", v, f, (0.1, 0.0, 0.15), 0.006, floor=0.0,
+                     view_pad=0.12, view=(18.0, -25.0), second_view=(18.0, 155.0),
+                     labels=("lit side", "far side"), name=name)
+    if name == "sphere":
+        v, f = sphere(0.1, level=4, centre=(0.0, 0.0, 0.1))
+        return Scene("paper sphere (r = 10 cm) resting on a table, lit on its equator", v, f,
+                     (0.1, 0.0, 0.1), 0.006, floor=0.0, view_pad=0.12, view=(20.0, -25.0),
+                     second_view=(20.0, 155.0), labels=("lit side", "far side"), name=name)
+    v, f = folded_sheet(A4[0], A4[1], angle=30.0, nx=43, ny=61)
+    return Scene("A4 sheet folded at 30 degrees across its middle, one half on a table, "
+                 "lit at a corner of that half", v, f, (0.004, 0.004, 0.0), 0.006, floor=0.0,
+                 view=(28.0, -58.0), second_view=(22.0, 20.0), labels=("", "along the fold"),
+                 name=name)
+
+
 def _grid(nx: int, ny: int, vertices) -> tuple:
     """Grid size of a demo sheet: its own (nx, ny), or scaled to about `vertices` in all."""
     if vertices is None:
@@ -81,19 +119,24 @@ def build(scene: Scene, material="paper", cells=128, seed=0, threads=None) -> Si
 
 
 def run_demo(out_dir, material="paper", cells=128, fps=24.0, max_time=240.0, frames=60, seed=0,
-             threads=None, quiet=False) -> dict:
-    """Burn the material's scene until nothing is left burning; write PNG frames, a GIF,
-    the per-frame arrays and a summary. Returns the summary (also in summary.json)."""
+             threads=None, quiet=False, scene=None) -> dict:
+    """Burn the material's scene (or the shell scene named by `scene`, one of SHELL_SCENES)
+    until nothing is left burning; write PNG frames, a GIF, the per-frame arrays and a
+    summary. Returns the summary (also in summary.json)."""
+    scene = default_scene(material) if scene is None else shell_scene(scene)
     os.makedirs(out_dir, exist_ok=True)
-    scene = default_scene(material)
     sim = build(scene, material, cells, seed, threads)
     dt = 1.0 / fps
     expected = _expected_duration(scene, material, max_time)
     expected_steps = int(np.ceil(expected / dt))
     record_every = max(1, int(round(expected_steps / frames)))
-    progress = None if quiet else Progress(expected_steps, label=f"burning {material}")
+    label = f"burning {material}" + (f" {scene.name}" if scene.name else "")
+    progress = None if quiet else Progress(expected_steps, label=label)
     renderer = render.SceneRenderer(scene.faces, sim.vertex_positions(), material, scene.floor,
-                                    pad=scene.view_pad)
+                                    elev=scene.view[0], azim=scene.view[1], pad=scene.view_pad,
+                                    second_view=scene.second_view if sim.geometry == "surface" else None,
+                                    labels=scene.labels)
+    title = material + (f" {scene.name}" if scene.name else "")
     store = {k: [] for k in ("time", "cell_states", "cell_char", "vertex_positions", "vertex_char",
                              "lattice_positions")}
     particle_frames, images, step, t0, sim_seconds = [], [], 0, time.perf_counter(), 0.0
@@ -108,7 +151,7 @@ def run_demo(out_dir, material="paper", cells=128, fps=24.0, max_time=240.0, fra
             done = not np.any(states == 1) or sim.time >= max_time
             if step % record_every == 0 or done:
                 _record(sim, states, store, particle_frames)
-                images.append(_picture(sim, states, renderer, material, aspect))
+                images.append(_picture(sim, states, renderer, material, aspect, title))
             if progress is not None:
                 if not done and step >= progress.total:
                     # The fire outlasts the estimate (a curled sheet slows it): count to the cap.
@@ -147,10 +190,14 @@ def _vertex_states(sim) -> np.ndarray:
     return np.where(sim.time < ign, 0, np.where(sim.time < out, 1, 2)).astype(np.uint8)
 
 
-def _picture(sim, states, renderer, material, aspect) -> np.ndarray:
-    cell_img = render.cell_image(states, sim.cell_char(), sim.inside(), material, aspect, width=240)
+def _picture(sim, states, renderer, material, aspect, title=None) -> np.ndarray:
+    title = material if title is None else title
+    if renderer.second_view is not None:
+        cell_img = None  # cells on a surface have no grid to draw: a second 3-D view instead
+    else:
+        cell_img = render.cell_image(states, sim.cell_char(), sim.inside(), material, aspect, width=240)
     return renderer.frame(sim.vertex_positions(), sim.vertex_char(), _vertex_states(sim), cell_img,
-                          sim.particles(), title=f"{material}   t = {sim.time:5.1f} s")
+                          sim.particles(), title=f"{title}   t = {sim.time:5.1f} s")
 
 
 def _record(sim, states, store, particle_frames) -> None:
@@ -182,6 +229,7 @@ def _write_outputs(out_dir, sim, store, particle_frames, images, scene, material
     burnt = float(np.mean(sim.cell_states()[sim.inside() == 1] == 2))
     summary = {
         "scene": scene.description, "material": material, "cells": cells, "lattice": sim.lattice_size,
+        "geometry": sim.geometry, "num_cells": sim.num_cells, "lattice_couples": sim.lattice_couples,
         "fps": fps, "simulated_seconds": round(sim.time, 3), "steps": steps,
         "wall_seconds": round(wall, 3), "simulation_seconds": round(sim_seconds, 3),
         "simulated_frames_per_second": round(steps / sim_seconds, 1) if sim_seconds > 0 else None,

@@ -100,10 +100,16 @@ class SceneRenderer:
 
     The 3-D axes keep fixed limits (from the scene's first frame, padded) so the motion
     reads frame to frame. Burnt-out faces are drawn see-through, so the sheet burns through.
+
+    second_view=(elev, azim) draws a second 3-D view instead of the top view (for shells on
+    their own surface, which have no N x N grid: a lantern from its lit and its far side); it
+    also shades the faces by their normals (a curved shell reads as curved) and draws the fire
+    particles behind the shell's centre before the shell, so the shell hides them.
     """
 
     def __init__(self, faces, first_positions, material="paper", floor=None, width_px=960,
-                 height_px=480, elev=32.0, azim=-58.0, pad=0.35):
+                 height_px=480, elev=32.0, azim=-58.0, pad=0.35, second_view=None,
+                 labels=("", "")):
         import matplotlib
 
         matplotlib.use("Agg")
@@ -116,25 +122,55 @@ class SceneRenderer:
         lo, hi = first_positions.min(0), first_positions.max(0)
         span = float(np.max(hi - lo))
         centre = 0.5 * (lo + hi)
+        self.centre = centre
         self.limits = [(c - (0.5 + pad) * span, c + (0.5 + pad) * span) for c in centre]
         if floor is not None:
             self.limits[2] = (floor - 0.02 * span, floor + (1.0 + pad) * span)
         self.fig = plt.figure(figsize=(width_px / 100, height_px / 100), dpi=100)
-        self.ax3 = self.fig.add_axes([0.0, 0.0, 0.62, 1.0], projection="3d")
+        self.view = (elev, azim)
+        self.second_view = None if second_view is None else tuple(second_view)
+        self.labels = labels
+        if self.second_view is None:
+            self.ax3 = self.fig.add_axes([0.0, 0.0, 0.62, 1.0], projection="3d")
+            self.ax2 = self.fig.add_axes([0.64, 0.06, 0.34, 0.84])
+        else:
+            self.ax3 = self.fig.add_axes([0.0, 0.0, 0.5, 0.94], projection="3d")
+            self.ax2 = self.fig.add_axes([0.5, 0.0, 0.5, 0.94], projection="3d")
+            self.ax2.computed_zorder = False
         # Draw in the order added (table, sheet, flames): mplot3d's per-collection depth sort
         # puts a large table polygon in front of the sheet lying on it.
         self.ax3.computed_zorder = False
-        self.ax2 = self.fig.add_axes([0.64, 0.06, 0.34, 0.84])
-        self.view = (elev, azim)
 
-    def frame(self, positions, vertex_char, vertex_state, cell_img, particles=None, title=""):
-        """One picture (H, W, 3) uint8."""
+    def frame(self, positions, vertex_char, vertex_state, cell_img=None, particles=None, title=""):
+        """One picture (H, W, 3) uint8. cell_img: the top view of the cells (ignored, and
+        may be None, with a second 3-D view)."""
+        shells = self.second_view is not None
+        self._draw3d(self.ax3, self.view, positions, vertex_char, vertex_state, particles, shells)
+        if shells:
+            self._draw3d(self.ax2, self.second_view, positions, vertex_char, vertex_state,
+                         particles, shells)
+            for t in list(self.fig.texts):
+                t.remove()
+            self.fig.text(0.5, 0.965, title, ha="center", va="center", fontsize=10)
+            for x, label in zip((0.25, 0.75), self.labels):
+                if label:
+                    self.fig.text(x, 0.92, label, ha="center", va="center", fontsize=8,
+                                  color=(0.35, 0.35, 0.35))
+        else:
+            self.ax2.cla()
+            self.ax2.set_axis_off()
+            self.ax2.imshow(cell_img)
+            self.ax2.set_title(title, fontsize=9)
+        self.fig.canvas.draw()
+        buf = np.asarray(self.fig.canvas.buffer_rgba())
+        return buf[..., :3].copy()
+
+    def _draw3d(self, ax, view, positions, vertex_char, vertex_state, particles, shells):
         from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
-        ax = self.ax3
         ax.cla()
         ax.set_axis_off()
-        ax.view_init(*self.view)
+        ax.view_init(*view)
         ax.set_xlim(*self.limits[0])
         ax.set_ylim(*self.limits[1])
         ax.set_zlim(*self.limits[2])
@@ -145,31 +181,58 @@ class SceneRenderer:
             ax.add_collection3d(Poly3DCollection(table, facecolors=(0.55, 0.42, 0.3, 1.0), zorder=0))
         rgb = char_colours(vertex_char, vertex_state, self.material).astype(float) / 255.0
         face_rgb = rgb[self.faces].mean(axis=1)
+        tris = positions[self.faces]
+        if shells:
+            face_rgb = face_rgb * self._shade(tris, view, vertex_state)[:, None]
         # Faces whose three vertices are burnt out are ash that fell away: draw them faint.
         gone = np.all(vertex_state[self.faces] == 2, axis=1) & np.all(vertex_char[self.faces] >= 1.0, axis=1)
         alpha = np.where(gone, 0.18, 1.0)
-        tris = positions[self.faces]
-        order = np.argsort(-self._depth(tris.mean(axis=1)))  # painter's order within the sheet
-        coll = Poly3DCollection(tris[order], facecolors=np.column_stack([face_rgb, alpha])[order],
-                                linewidths=0, zorder=1)
+        order = np.argsort(-self._depth(tris.mean(axis=1), view))  # painter's order within the sheet
+        colours = np.column_stack([face_rgb, alpha])[order]
+        if shells:
+            # Edges in the face colour close the anti-aliasing seams that let the far wall of a
+            # closed shell show through its near wall as a grid of dots; ash faces get none
+            # (their overlapping faint edges would draw a wireframe).
+            edges = colours.copy()
+            edges[gone[order], 3] = 0.0
+            coll = Poly3DCollection(tris[order], facecolors=colours, edgecolors=edges,
+                                    linewidths=0.4, zorder=1)
+        else:
+            coll = Poly3DCollection(tris[order], facecolors=colours, linewidths=0, zorder=1)
         ax.add_collection3d(coll)
         if particles is not None and len(particles[1]):
             p, t = particles
-            ax.scatter(p[:, 0], p[:, 1], p[:, 2], c=_temperature_colours(t), s=4, depthshade=False,
-                       linewidths=0, zorder=2)
-        self.ax2.cla()
-        self.ax2.set_axis_off()
-        self.ax2.imshow(cell_img)
-        self.ax2.set_title(title, fontsize=9)
-        self.fig.canvas.draw()
-        buf = np.asarray(self.fig.canvas.buffer_rgba())
-        return buf[..., :3].copy()
+            colours = _temperature_colours(t)
+            if shells:
+                # Behind the shell's centre: drawn first, so the shell in front hides them.
+                behind = self._depth(p, view) > self._depth(self.centre[None], view)[0]
+                groups = ((behind, 0.5), (~behind, 2))
+            else:
+                groups = ((np.ones(len(t), bool), 2),)
+            for mask, z in groups:
+                if np.any(mask):
+                    ax.scatter(p[mask, 0], p[mask, 1], p[mask, 2], c=colours[mask], s=4,
+                               depthshade=False, linewidths=0, zorder=z)
 
-    def _depth(self, pts):
+    @staticmethod
+    def _eye(view):
+        elev, azim = np.radians(view[0]), np.radians(view[1])
+        return np.array([np.cos(elev) * np.cos(azim), np.cos(elev) * np.sin(azim), np.sin(elev)])
+
+    def _shade(self, tris, view, vertex_state):
+        """Per-face brightness: two-sided diffuse light from above the camera, so each view is
+        lit; glowing (burning) faces are not darkened."""
+        n = np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0])
+        n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-30)
+        light = self._eye(view) + np.array([0.0, 0.0, 0.8])
+        light /= np.linalg.norm(light)
+        shade = 0.45 + 0.55 * np.abs(n @ light)
+        glowing = np.any(vertex_state[self.faces] == 1, axis=1)
+        return np.where(glowing, 1.0, shade)
+
+    def _depth(self, pts, view=None):
         """Distance along the viewing direction (larger = farther from the camera)."""
-        elev, azim = np.radians(self.view[0]), np.radians(self.view[1])
-        eye = np.array([np.cos(elev) * np.cos(azim), np.cos(elev) * np.sin(azim), np.sin(elev)])
-        return -pts @ eye
+        return -pts @ self._eye(self.view if view is None else view)
 
     def close(self):
         self.plt.close(self.fig)

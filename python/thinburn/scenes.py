@@ -52,3 +52,41 @@ def disk_sheet(radius=0.1, rings=12, segments=48, z=0.0):
         faces.append(np.stack([b0 + s, b1 + s, b1 + s1], 1))
         faces.append(np.stack([b0 + s, b1 + s1, b0 + s1], 1))
     return verts, np.concatenate(faces).astype(np.int32)
+
+
+def lantern(radius=0.1, height=0.3, segments=128, rings=60, z=0.0):
+    """An open paper cylinder (a lantern) standing on its rim at height z, axis along +z:
+    (vertices (segments * (rings + 1), 3), faces). Vertex (s, k) is segment s round the axis
+    (angle 2 pi s / segments from +x), ring k up the side."""
+    r = V.real(radius, "radius", low=0.0, low_open=True)
+    h = V.real(height, "height", low=0.0, low_open=True)
+    segments = V.integer(segments, "segments", low=3)
+    rings = V.integer(rings, "rings", low=1)
+    from ._surface_shapes import cylinder
+
+    v, f = cylinder(r=r, h=h, nt=segments, nz=rings)
+    return v + np.array([0.0, 0.0, float(z)]), f
+
+
+def sphere(radius=0.1, level=4, centre=(0.0, 0.0, 0.0)):
+    """A closed sphere as a subdivided icosahedron (level 4: 2562 vertices, 5120 faces)."""
+    r = V.real(radius, "radius", low=0.0, low_open=True)
+    level = V.integer(level, "level", low=0, high=7)
+    from ._surface_shapes import icosphere
+
+    v, f = icosphere(level, r)
+    return v + np.asarray(centre, float), f
+
+
+def folded_sheet(width=A4[0], height=A4[1], angle=30.0, nx=43, ny=61, z=0.0):
+    """A sheet folded across its middle (the fold along x at y = height/2): the half y < height/2
+    lies flat at height z, the other half rises from the fold at `angle` degrees.
+    (vertices (nx * ny, 3), faces); ny odd puts a row of vertices on the fold."""
+    a = np.radians(V.real(angle, "angle", low=0.0, high=180.0))
+    v, f = rect_sheet(width, height, nx=nx, ny=ny, z=z)
+    half = 0.5 * V.real(height, "height", low=0.0, low_open=True)
+    up = v[:, 1] > half
+    s = v[up, 1] - half
+    v[up, 1] = half + s * np.cos(a)
+    v[up, 2] = z + s * np.sin(a)
+    return v, f
