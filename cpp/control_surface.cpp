@@ -112,15 +112,18 @@ void ControlSurface::build_topology() {
 }
 
 double ControlSurface::edge_curvature(double quantile) const {
+  // Per couple, its most curved edge (a cylinder's edges round it, not those along it); then
+  // the quantile over couples, so a crease (a few couples) does not count as a curve.
   const auto& pos = coarse_->positions();
   const auto& nrm = coarse_->normals();
-  std::vector<double> k;
-  for (int s = 0; s < topo_.springs(); ++s) {
-    if (topo_.kind[s] != 0 || (topo_.spring_a[s] & 1)) continue;  // structure springs of the bottom layer: the edges
-    const int a = topo_.spring_a[s] / 2, b = topo_.spring_b[s] / 2;
-    const double len = (pos[a] - pos[b]).norm();
-    if (len > 0) k.push_back(std::acos(std::clamp(nrm[a].dot(nrm[b]), -1.0, 1.0)) / len);
-  }
+  const int C = topo_.couples;
+  std::vector<double> k(C, 0.0);
+  for (int c = 0; c < C; ++c)
+    for (int q = topo_.nbr_offset[c]; q < topo_.nbr_offset[c + 1]; ++q) {
+      const int o = topo_.nbr_index[q];
+      const double len = (pos[c] - pos[o]).norm();
+      if (len > 0) k[c] = std::max(k[c], std::acos(std::clamp(nrm[c].dot(nrm[o]), -1.0, 1.0)) / len);
+    }
   if (k.empty()) return 0.0;
   const std::size_t at = std::min(k.size() - 1, static_cast<std::size_t>(quantile * (k.size() - 1)));
   std::nth_element(k.begin(), k.begin() + at, k.end());

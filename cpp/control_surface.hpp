@@ -60,7 +60,8 @@ class ControlSurface {
   const SurfaceCells& cells() const { return *coarse_; }
 
   /// @brief How strongly the shell curves at this spacing: the given quantile (0..1) over the
-  /// control surface's edges of the angle between their ends' normals over their length (1/m).
+  /// couples of their most curved edge's turn (the angle between its ends' normals over its
+  /// length, 1/m).
   double edge_curvature(double quantile) const;
   /// @brief Embed rest points lying on (or near) the shell.
   SurfaceEmbedding embed(const RowMatX3& points) const;

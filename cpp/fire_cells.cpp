@@ -186,8 +186,8 @@ Eigen::Vector3d ShellCells::normal_from_neighbours(int cell, const CellView& vie
 
 double ShellCells::grad2(int cell, const CellView& view) const {
   // The grid's |grad h|^2 is tan^2 of the angle the surface turned out of its rest plane; on a
-  // shell, the angle its normal turned from the rest normal.
-  const double c = std::clamp(view.normal(cell).dot(rest_normal(cell)), -1.0, 1.0);
+  // shell, the angle its normal turned from the rest normal, less the turn of its whole piece.
+  const double c = std::clamp(view.normal(cell).dot(view.reference_normal(cell)), -1.0, 1.0);
   if (c <= 1e-6) return 1e12;  // turned by 90 degrees or more: as steep as it gets
   return (1.0 - c * c) / (c * c);
 }

@@ -31,6 +31,9 @@ double seeded_uniform(std::uint64_t seed, std::uint64_t stream, std::uint64_t ke
 struct CellView {
   std::function<Eigen::Vector3d(int)> position;
   std::function<Eigen::Vector3d(int)> normal;
+  /// The cell's rest normal turned with its piece of the shell as a whole: eq 1's slope is the
+  /// turn away from it, so a lantern that tips over is not slowed, its curl is.
+  std::function<Eigen::Vector3d(int)> reference_normal;
 };
 
 /// @brief Eq 1 and the drive in world terms, for a layout to read on its tangent planes.

@@ -3,6 +3,7 @@
 #include "shell.hpp"
 
 #include <Eigen/Geometry>
+#include <Eigen/SVD>
 
 #include <algorithm>
 #include <cmath>
@@ -78,9 +79,10 @@ Shell::Shell(const SurfaceCells& cells, const RowMatX3& vertices, const RowMatX3
     }
   }
   // A chosen lattice also follows the curve: at most kMaxTurn radians between neighbouring
-  // couples' normals over most edges (a lantern of r = 10 cm gets about 16 couples round, not
-  // 6; a crease alone does not refine), at most kMaxRefine times finer than the grid's choice.
-  constexpr double kMaxTurn = 0.4, kCurvedEdges = 0.9, kMaxRefine = 4.0;
+  // couples' normals at half the couples (a lantern of r = 10 cm gets about 16 couples round,
+  // not 6; a crease, a few edges, does not refine: at the 0.9 quantile a folded letter got 1024
+  // couples and ran at 8 frames/s), at most kMaxRefine times finer than the grid's choice.
+  constexpr double kMaxTurn = 0.4, kCurvedEdges = 0.5, kMaxRefine = 4.0;
   const double coarsest = spacing;
   for (int pass = 0; params_.lattice == 0 && pass < 3; ++pass) {
     const double kappa = control_->edge_curvature(kCurvedEdges);
@@ -98,6 +100,7 @@ Shell::Shell(const SurfaceCells& cells, const RowMatX3& vertices, const RowMatX3
   const double paper_cell = cells.total_area() / (kPaperCells * kPaperCells);
   const double per_paper_cell = (cells.total_area() / cells.size()) / paper_cell;
   finish(cell_mass, cells.size(), std::vector<std::uint8_t>(cells.size(), 1), control_->topology(), per_paper_cell);
+  find_pieces();
   if (params_.has_floor) set_floor_offsets();
   if (!pinned.empty()) pin(pinned);
 }
@@ -365,10 +368,77 @@ void Shell::step(double dt, const ShellSources& src, const Eigen::Vector3d& wind
   for (Eigen::Index c = 0; c < rotation_.size(); ++c)
     if (std::abs(rotation_[c] - applied_rotation_[c]) >= kRotationQuantum) applied_rotation_[c] = rotation_[c];
   stats_ = dynamics_->step(dt, applied_rotation_, bending_->heat_rate());
+  if (control_) update_piece_rotations();
+}
+
+void Shell::find_pieces() {
+  // Connected pieces of the control surface (its structure springs), breadth-first.
+  const LatticeTopology& t = control_->topology();
+  const int C = t.couples;
+  piece_of_.assign(C, -1);
+  int pieces = 0;
+  std::vector<int> queue;
+  for (int start = 0; start < C; ++start) {
+    if (piece_of_[start] >= 0) continue;
+    queue.assign(1, start);
+    piece_of_[start] = pieces;
+    for (std::size_t q = 0; q < queue.size(); ++q)
+      for (int j = t.nbr_offset[queue[q]]; j < t.nbr_offset[queue[q] + 1]; ++j)
+        if (piece_of_[t.nbr_index[j]] < 0) {
+          piece_of_[t.nbr_index[j]] = pieces;
+          queue.push_back(t.nbr_index[j]);
+        }
+    ++pieces;
+  }
+  piece_rotation_.assign(pieces, Eigen::Matrix3d::Identity());
+}
+
+void Shell::update_piece_rotations() {
+  // Each piece's best rigid rotation since rest (Kabsch on its couples' mid-points, weighted by
+  // mass): what the piece did as a whole, which eq 1's slope must not count.
+  const RowMatX3& x = lattice_->positions();
+  const RowMatX3& x0 = lattice_->rest();
+  const int P = static_cast<int>(piece_rotation_.size());
+  std::vector<Eigen::Vector3d> c(P, Eigen::Vector3d::Zero()), c0(P, Eigen::Vector3d::Zero());
+  std::vector<double> m(P, 0.0);
+  auto mid = [](const RowMatX3& y, int k) { return Eigen::Vector3d(0.5 * (y.row(2 * k) + y.row(2 * k + 1)).transpose()); };
+  const int C = static_cast<int>(piece_of_.size());
+  for (int k = 0; k < C; ++k) {
+    const double w = control_mass_[2 * k] + control_mass_[2 * k + 1] + 1e-12;
+    c[piece_of_[k]] += w * mid(x, k);
+    c0[piece_of_[k]] += w * mid(x0, k);
+    m[piece_of_[k]] += w;
+  }
+  std::vector<Eigen::Matrix3d> H(P, Eigen::Matrix3d::Zero());
+  for (int p = 0; p < P; ++p) c[p] /= m[p], c0[p] /= m[p];
+  for (int k = 0; k < C; ++k) {
+    const int p = piece_of_[k];
+    const double w = control_mass_[2 * k] + control_mass_[2 * k + 1] + 1e-12;
+    H[p] += w * (mid(x0, k) - c0[p]) * (mid(x, k) - c[p]).transpose();
+    // The couples' axes too, so that a piece of coplanar couples has a defined turn about them.
+    H[p] += w * thickness_ * thickness_ * (x0.row(2 * k + 1) - x0.row(2 * k)).transpose() *
+            (x.row(2 * k + 1) - x.row(2 * k)) / (thickness_ * thickness_);
+  }
+  for (int p = 0; p < P; ++p) {
+    Eigen::JacobiSVD<Eigen::Matrix3d> svd(H[p], Eigen::ComputeFullU | Eigen::ComputeFullV);
+    Eigen::Matrix3d D = Eigen::Matrix3d::Identity();
+    if ((svd.matrixV() * svd.matrixU().transpose()).determinant() < 0) D(2, 2) = -1.0;
+    piece_rotation_[p] = svd.matrixV() * D * svd.matrixU().transpose();
+  }
+}
+
+Eigen::Vector3d Shell::turned_rest_normal(int cell, const Eigen::Vector3d& rest_normal) const {
+  if (!control_) return rest_normal;
+  // The piece of the couple carrying the largest share of the cell.
+  constexpr int S = SurfaceEmbedding::kStencil;
+  int best = 0;
+  for (int q = 1; q < S; ++q)
+    if (surface_cells_.share[std::size_t(cell) * S + q] > surface_cells_.share[std::size_t(cell) * S + best]) best = q;
+  return piece_rotation_[piece_of_[surface_cells_.couple[std::size_t(cell) * S + best]]] * rest_normal;
 }
 
 Shell::Checkpoint Shell::checkpoint() const {
-  return Checkpoint{control_mass_, burnt_area_, strength_, applied_rotation_, mass_dirty_, strength_dirty_,
+  return Checkpoint{control_mass_, burnt_area_, strength_, applied_rotation_, piece_rotation_, mass_dirty_, strength_dirty_,
                     stats_, std::make_unique<ParticleSystem>(*particles_), std::make_unique<Bending>(*bending_),
                     lattice_->positions(), dynamics_->checkpoint()};
 }
@@ -378,6 +448,7 @@ void Shell::rollback(Checkpoint&& c) {
   burnt_area_ = std::move(c.burnt_area);
   strength_ = std::move(c.strength);
   applied_rotation_ = std::move(c.applied_rotation);
+  piece_rotation_ = std::move(c.piece_rotation);
   mass_dirty_ = c.mass_dirty;
   strength_dirty_ = c.strength_dirty;
   stats_ = c.stats;

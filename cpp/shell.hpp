@@ -69,6 +69,9 @@ class Shell {
   Eigen::Vector3d cell_position(int cell) const;
   /// @brief Control surface: the layer's normal at a cell now (bottom -> top).
   Eigen::Vector3d cell_normal(int cell) const;
+  /// @brief A cell's rest normal turned as its piece of the shell turned as a whole (its best
+  /// rigid rotation since rest); the rest normal itself on a grid lattice.
+  Eigen::Vector3d turned_rest_normal(int cell, const Eigen::Vector3d& rest_normal) const;
   /// @brief Grid lattice: per control cell ((M-1)^2 rows), the lowest and highest
   /// displacement its cells can have now: their four couples' extremes.
   void quad_displacement_bounds(RowMatX3& lo, RowMatX3& hi) const;
@@ -107,12 +110,16 @@ class Shell {
               const LatticeTopology& topology, double per_paper_cell);
   void pin(const std::vector<std::uint8_t>& pinned);
   void set_floor_offsets();
+  void find_pieces();
+  void update_piece_rotations();
   void hand_over_masses_and_strength();
 
   const Sheet* sheet_ = nullptr;              // grid lattice
   std::unique_ptr<ControlSurface> control_;   // control surface
   SurfaceEmbedding surface_vertices_, surface_cells_;
   std::vector<double> cell_area_;
+  std::vector<int> piece_of_;                  // control surface: per couple, its connected piece
+  std::vector<Eigen::Matrix3d> piece_rotation_;  // per piece: its rigid rotation since rest
   ShellParams params_;
   int M_ = 0;
   double thickness_ = 0.0;
@@ -131,6 +138,7 @@ class Shell {
 
 struct Shell::Checkpoint {
   Eigen::VectorXd control_mass, burnt_area, strength, applied_rotation;
+  std::vector<Eigen::Matrix3d> piece_rotation;
   bool mass_dirty, strength_dirty;
   StepStats stats;
   std::unique_ptr<ParticleSystem> particles;

@@ -78,6 +78,9 @@ void Simulation::bind_cells() {
   surface_ = dynamic_cast<const ShellCells*>(cells_.get());
   view_.position = [this](int c) { return cell_position(c); };
   view_.normal = [this](int c) { return cell_normal(c); };
+  view_.reference_normal = [this](int c) {
+    return shell_ ? shell_->turned_rest_normal(c, cells_->rest_normal(c)) : cells_->rest_normal(c);
+  };
   law_.v = [this](int c) { return cell_speed(c); };
   law_.max_drive = params_.max_drive;
 }

@@ -58,7 +58,7 @@ class ControlSurface:
         return np.asarray(self._c.nbr_index[off[couple]:off[couple + 1]])
 
     def edge_curvature(self, quantile: float = 0.9) -> float:
-        """The quantile over edges of (angle between the ends' normals) / length, 1/m."""
+        """The quantile over couples of their most curved edge's (angle between normals) / length, 1/m."""
         return self._c.edge_curvature(real(quantile, "quantile", low=0.0, high=1.0))
 
     def embed(self, points):
