@@ -73,6 +73,9 @@ def build(scene_name: str, args):
     s.floor_mode, s.floor_object = "OBJECT", table
     s.mat_V0 = args.v0
     s.crumple = not args.no_crumple
+    s.crumple_gain = args.crumple_gain
+    s.lattice = args.lattice
+    s.flame_intensity, s.flame_temperature = 2.0, 1700.0  # as render_fire.py's Standard looks
     _igniter(sheet, lit, radius=args.radius)
     wood = bpy.data.materials.new("Table")
     wood.node_tree.nodes["Principled BSDF"].inputs["Base Color"].default_value = (0.12, 0.08, 0.05, 1.0)
@@ -148,6 +151,10 @@ def main(argv=None) -> int:
     ap.add_argument("--v0", type=float, default=20.0, help="spread speed, mm/s (paper: 3.5)")
     ap.add_argument("--radius", type=float, default=0.01, help="igniter radius, m")
     ap.add_argument("--no-crumple", action="store_true")
+    ap.add_argument("--crumple-gain", type=float, default=0.3,
+                    help="Crumple Amount (the add-on's default is 1; 0.3 keeps curved shells sane, "
+                         "docs/blender.md)")
+    ap.add_argument("--lattice", type=int, default=0, help="Motion Detail (0: the core's choice)")
     ap.add_argument("--name", default=None, help="picture name (default blender_<scene>)")
     args = ap.parse_args(argv)
     args.out.mkdir(parents=True, exist_ok=True)
@@ -160,9 +167,14 @@ def main(argv=None) -> int:
         sheet, probes, cam = build(args.scene, args)
         rest = H.world_vertices(sheet)
         t0 = time.perf_counter()
-        bpy.ops.thinburn.bake()
+        job = sys.modules["thinburn_addon"].job.BakeJob(bpy.context, sheet)
+        job.run()
+        print(job.message)
+        for text in job.warnings:
+            print("warning:", text)
         bake_s = time.perf_counter() - t0
         info = {"scene": args.scene, "frames": args.frames, "cells": args.cells, "v0_mm_s": args.v0,
+                "crumple_gain": args.crumple_gain, "lattice": args.lattice, "shape": job.shape,
                 "bake_s": round(bake_s, 2), "bake_s_per_frame": round(bake_s / args.frames, 4)}
         info.update(measure(sheet, probes, rest, H.cache_file(args.cache, sheet.name + ".pc2"),
                             24.0))
