@@ -129,13 +129,16 @@ class ThinBurnSettings(bpy.types.PropertyGroup):
                     "Burns Like")
     cells: IntProperty(
         name="Fire Detail", default=128, min=8, max=1024, soft_max=512, options=STATIC,
-        description="How finely the fire spreads: the sheet is divided into this many fire cells "
-                    "per side (the paper's N, 128 there). More give finer fronts and cost more")
+        description="How finely the fire spreads: a flat sheet is divided into this many fire "
+                    "cells per side (the paper's N, 128 there); a curved shell (a lantern, a "
+                    "sphere, a folded letter) gets about as many squared on its surface. More give "
+                    "finer fronts and cost more")
     lattice: IntProperty(
         name="Motion Detail", default=0, min=0, max=257, soft_max=64, options=STATIC,
         description="How finely the sheet's motion is simulated: the lattice that carries it has "
-                    "this many couples per side (the paper's M); 0 chooses it from the sheet's "
-                    "size and the Fire Detail")
+                    "this many couples per side (the paper's M; on a curved shell about as many "
+                    "squared over its surface); 0 chooses it from the sheet's size and the Fire "
+                    "Detail")
     crumple: BoolProperty(
         name="Crumple", default=True, options=STATIC,
         description="Simulate the sheet's motion (paper §4: heat, bending, gravity, wind, fire "
