@@ -92,7 +92,6 @@ def edges_of(f):
 
 def burn(name, v, f, lit, seconds=2.5, **kw):
     mat = thinburn.MATERIALS["paper"].with_(V0=40.0)  # mm/s, a fast front: a short repro
-    t0 = time.perf_counter()
     try:
         sim = thinburn.Simulation(v, f, material=mat, cells=kw.pop("cells", 32), seed=0,
                                   floor=0.0005, threads=1, **kw)

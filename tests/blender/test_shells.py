@@ -184,7 +184,7 @@ def _baked_world(addon, sheet, folder):
 @pytest.mark.parametrize("scene", ["lantern", "a4"])
 def test_crumpling_keeps_edge_lengths(addon, tmp_path, scene):
     """Two seconds of burning with Crumple on (Crumple Amount 0.3 on the lantern): no edge
-    stretches or shrinks by more than 30 % (measured: lantern 0.09, flat sheet 0.15), no
+    stretches or shrinks by more than 30 % (measured: lantern 0.09, flat sheet 0.11), no
     vertex leaves by more than 15 cm, and the bake warns of no stretch."""
     table = make_box_table(top=0.0)
     if scene == "lantern":
