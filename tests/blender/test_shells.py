@@ -232,3 +232,32 @@ def test_a_bake_that_stretches_is_warned_about(addon, tmp_path, monkeypatch):
     job = _bake_report(addon, sheet)
     assert job.max_strain > 1e-4
     assert any("'Sheet' stretched" in w for w in job.warnings), job.warnings
+
+
+def test_quick_burn_lights_a_lantern_on_its_side_and_floors_it_on_the_table(addon, tmp_path):
+    """Quick Burn on a lantern standing on a table, the cursor beside it: the igniter sits on
+    the tube's surface nearest the cursor, Floor = Object is the table, and the fire starts
+    there (the vertex nearest the igniter is among the first to catch, the far side later)."""
+    bpy.ops.wm.save_as_mainfile(filepath=str(tmp_path / "lantern.blend"))
+    scene = bpy.context.scene
+    scene.frame_start, scene.frame_end = 1, 24
+    table = make_box_table(top=0.0)
+    sheet = make_lantern(radius=R, depth=0.3, segments=48, cuts=15)
+    sheet.thinburn.cells = 16
+    sheet.thinburn.threads = 1
+    sheet.thinburn.crumple = False
+    scene.cursor.location = (0.3, 0.0, 0.15)
+    for o in scene.objects:
+        o.select_set(o is sheet)
+    bpy.context.view_layer.objects.active = sheet
+    assert bpy.ops.thinburn.quick_burn() == {"FINISHED"}
+    s = sheet.thinburn
+    assert s.floor_mode == "OBJECT" and s.floor_object == table
+    (igniter,) = s.igniter_collection.objects
+    np.testing.assert_allclose(igniter.location, (R, 0.0, 0.15), atol=2e-3)
+    rest = world_vertices(sheet)
+    ignite = point_attribute(sheet, "thinburn_ignite_time")
+    near = int(np.argmin(np.linalg.norm(rest - np.array(igniter.location), axis=1)))
+    assert ignite[near] <= ignite.min() + 1.0
+    far = rest[:, 0] < -0.09
+    assert np.all(ignite[far] > ignite[near] + 10)  # no mirrored fire at the start
