@@ -9,12 +9,14 @@
 2. A UV sphere (r = 0.1 m) lit on its equator: 21 % here, 85 % on Blender's UV sphere (48 x 24).
 3. A sheet folded at 30 degrees (0.21 x 0.30 m, 41 x 41 vertices): the automatic lattice has
    10 couples and edges at the raised flap's free edge stretch 15x within 2 s (2x with
-   crumple_gain 0.3); lattice=9 (74 couples) keeps them at 11 %.
+   crumple_gain 0.3); lattice=9 (74 couples) keeps them at 11 %. At the add-on's default
+   cells = 128 the automatic lattice has 64 couples and the letter stays at 9 %.
 4. Three 0.2 m sheets 4 mm apart in one mesh: at cells 16 and 32 the automatic lattice raises
    "couple 0 of the control surface has no neighbour (a piece too small ...)"; at cells = 64
    it is 16 couples for the three sheets. lattice=8 builds, but its layer (h = 12 mm) is
    thicker than the 4 mm between the sheets, and with lattice 9, cells = 64 and
-   crumple_gain = 0.3 edges stretch 5.6x within 5 s (in Blender: 6.8x, spiky shards).
+   crumple_gain = 0.3 edges stretch 5.6x within 5 s (in Blender: 6.8x, spiky shards). At the
+   default cells = 128 (64 couples, h = 11.6 mm) and crumple_gain 1: 11.7x within 3 s.
 5. lattice = 33 on the lantern (1182 couples) costs 0.8 s per 1/24 s step on one core.
 """
 from __future__ import annotations
@@ -133,6 +135,11 @@ def main():
     burn("stack of 3 sheets, lattice 8", v, f, (-0.1, -0.1, 0.0005), seconds=0.5, cells=32, lattice=8)
     burn("stack, lattice 9, cells 64, gain 0.3", v, f, (-0.1, -0.1, 0.0045), seconds=5.0, cells=64,
          lattice=9, crumple_gain=0.3)
+    burn("stack, cells 128 (the add-on's default)", v, f, (-0.1, -0.1, 0.0045), seconds=3.0,
+         cells=128)
+    v, f = letter()
+    burn("letter, cells 128 (the add-on's default)", v, f, (-0.105, -0.15, 0.0005), seconds=2.0,
+         cells=128)
     v, f = lantern()
     burn("lantern, lattice 33", v, f, (0.1, 0, 0.1505), seconds=0.5, lattice=33)
 
