@@ -62,9 +62,9 @@ def build(scene_name: str, args):
                   "far": (0.1, 0.1, 0.0)}
         cam = ((0.3, -0.4, 0.35), (0.0, 0.0, 0.0))
     elif scene_name == "a4":
-        sheet = H.make_sheet(n=43, size=0.21, z=0.0)  # square 0.21 m; A4's width
-        lit = (-0.105, -0.105, 0.0)
-        probes = {"lit": lit, "centre": (0.0, 0.0, 0.0), "far": (0.105, 0.105, 0.0)}
+        sheet = H.make_rect("Sheet", 0.21, 0.297, 43, 61)  # A4, lying on the table
+        lit = (-0.105, -0.1485, 0.0)
+        probes = {"lit": lit, "centre": (0.0, 0.0, 0.0), "far": (0.105, 0.1485, 0.0)}
         cam = ((0.3, -0.4, 0.35), (0.0, 0.0, 0.0))
     else:
         raise SystemExit(f"unknown scene {scene_name!r}")

@@ -209,6 +209,21 @@ def make_uv_sphere(name="Sphere", radius=0.1, segments=64, rings=32, centre=(0.0
     return obj
 
 
+def make_rect(name="Sheet", width=0.21, height=0.297, nx=43, ny=61, z=0.0):
+    """A width × height sheet of nx × ny vertices at height z, centred on the origin (A4)."""
+    import bpy
+    xs, ys = np.linspace(-width / 2, width / 2, nx), np.linspace(-height / 2, height / 2, ny)
+    verts = [(x, y, z) for y in ys for x in xs]
+    faces = [(j * nx + i, j * nx + i + 1, (j + 1) * nx + i + 1, (j + 1) * nx + i)
+             for j in range(ny - 1) for i in range(nx - 1)]
+    mesh = bpy.data.meshes.new(name)
+    mesh.from_pydata(verts, [], faces)
+    obj = bpy.data.objects.new(name, mesh)
+    bpy.context.scene.collection.objects.link(obj)
+    bpy.context.view_layer.objects.active = obj
+    return obj
+
+
 def make_folded(name="Letter", width=0.21, depth=0.15, fold_deg=30.0, n=41, z=0.0):
     """A sheet folded along y = 0 (a letter): the half y < 0 lies flat at height z, the half
     y > 0 rises at ``fold_deg`` degrees; n × n vertices, the fold on a row of vertices."""
