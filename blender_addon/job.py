@@ -321,6 +321,8 @@ class BakeJob:
         if self.want_particles:
             fire.apply_particles(obj, self.modifier_path, self.particle_frames, start)
         obj.thinburn.baked_file = self.modifier_path
+        obj.thinburn.baked_shape = "" if self.shape is None else describe_shape(self.shape)
+        obj.thinburn.baked_strain = 0.0
         materials.record_bake(obj)
         self._restore_frame()
         self.finished = True
@@ -335,6 +337,7 @@ class BakeJob:
         if self.stretch is not None:
             worst, at = self.stretch.largest(burnout)
             self.max_strain, self.max_strain_frame = worst, at
+            obj.thinburn.baked_strain = worst
             text = stretch.stretch_warning(self.obj_name, worst, at, self.lattice)
             if text:
                 self.warnings.append(text)

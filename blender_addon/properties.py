@@ -232,6 +232,14 @@ class ThinBurnSettings(bpy.types.PropertyGroup):
     baked_file: StringProperty(
         name="Baked File", default="", options=STATIC,
         description="The PC2 file of the current bake (set by the bake, cleared by Free Bake)")
+    baked_shape: StringProperty(
+        name="Baked As", default="", options=STATIC,
+        description="What the core made of the sheet in the current bake: a flat sheet (the "
+                    "paper's grid) or a curved shell (cells on its surface); set by the bake")
+    baked_strain: FloatProperty(
+        name="Largest Stretch", default=0.0, options=STATIC,
+        description="The largest |length / rest length - 1| of an edge over the current bake "
+                    "(Crumple on; set by the bake)")
     # What the bake wrote, so that Free removes all of it after a rename, and the file that made
     # it, so that Free in a copy made by Save As never deletes the original's cache.
     baked_files: CollectionProperty(

@@ -60,9 +60,13 @@ def lantern_fire(addon, tmp_path):
 
 
 def test_lantern_is_baked_as_a_curved_shell(lantern_fire):
-    _, job = lantern_fire
+    sheet, job = lantern_fire
     assert job.shape["geometry"] == "surface"
     assert "a curved shell" in job.message and "fire cells on its surface" in job.message
+    assert sheet.thinburn.baked_shape.startswith("a curved shell: 576 fire cells")
+    assert sheet.thinburn.baked_strain == 0.0  # Crumple off: nothing moves
+    assert bpy.ops.thinburn.free_bake() == {"FINISHED"}
+    assert sheet.thinburn.baked_shape == ""
 
 
 def test_lantern_far_side_catches_last_at_the_geodesic_time(lantern_fire):
@@ -204,9 +208,18 @@ def test_crumpling_keeps_edge_lengths(addon, tmp_path, scene):
     strain = edge_strain(frames[0], frames, mesh_edges(sheet))
     assert strain.max() < 0.3, strain.max()
     assert abs(job.max_strain - strain.max()) < 1e-3 or job.max_strain <= strain.max()
+    assert sheet.thinburn.baked_strain == pytest.approx(job.max_strain)
+    assert sheet.thinburn.baked_shape.startswith("a curved shell" if scene == "lantern" else "a flat sheet")
     assert np.linalg.norm(frames - frames[0], axis=2).max() < 0.15
     assert np.abs(frames[0] - rest).max() < 1e-3  # the first frame is the rest shape (lifted 0.5 mm)
     assert not [w for w in job.warnings if "stretched" in w]
+    # the Bake panel says what the sheet was baked as, and how far it stretched
+    from test_addon import _Context, _Layout
+    drawn = []
+    panel = addon.panels.PHYSICS_PT_thinburn_cache
+    panel.draw(type("P", (), {"layout": _Layout(drawn)})(), _Context(sheet))
+    shown = [d for d in drawn if d.startswith("label: As a ")]
+    assert shown and "edges stretched up to" in shown[0], drawn
 
 
 def test_stretch_meter_and_its_warning(addon):
