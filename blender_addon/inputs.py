@@ -1,6 +1,7 @@
 """Reading a bake's inputs from the scene. Main thread only (this is where bpy is touched)."""
 from __future__ import annotations
 
+import math
 import os
 from dataclasses import dataclass
 
@@ -41,6 +42,23 @@ def sheet_geometry(obj):
     mw = np.array(obj.matrix_world, dtype=np.float64)
     world = co.reshape(n, 3).astype(np.float64) @ mw[:3, :3].T + mw[:3, 3]
     return world, tris.reshape(m, 3), mw
+
+
+def cell_spacing(world: np.ndarray, tris: np.ndarray, cells: int) -> float:
+    """About the distance between the core's fire cells, m, before the core says (it reports
+    its own, ``Simulation.cell_spacing``): a curved shell's surface carries about cells² cells,
+    so sqrt(area) / cells; a flat sheet's grid spans its bounding box, which is no smaller."""
+    a, b, c = (world[tris[:, k]] for k in range(3))
+    area = 0.5 * float(np.linalg.norm(np.cross(b - a, c - a), axis=1).sum())
+    return math.sqrt(area) / max(int(cells), 1)
+
+
+def mesh_edges(obj) -> np.ndarray:
+    """(e, 2) vertex indices of the mesh's edges."""
+    mesh = obj.data
+    edges = np.empty(2 * len(mesh.edges), dtype=np.int32)
+    mesh.edges.foreach_get("vertices", edges)
+    return edges.reshape(-1, 2)
 
 
 def pin_mask(obj, group_name: str) -> np.ndarray:

@@ -14,7 +14,7 @@ import bpy
 import numpy as np
 import thinburn
 
-from . import cache, fire, inputs, materials, properties
+from . import cache, fire, inputs, materials, properties, stretch
 from .inputs import BakeError
 from .worker import CoreWorker, FrameTask, path_ignitions
 
@@ -70,6 +70,32 @@ def _check_floor(obj, world, floor, settings):
                         "sheet up, or lower the floor (Floor Height, or the Floor object)")
 
 
+def describe_shape(shape: dict) -> str:
+    """The report's words for what the core made of the sheet (worker.simulation_shape)."""
+    if shape["geometry"] == "surface":
+        text = (f"a curved shell: {shape['cells']} fire cells on its surface, "
+                f"{shape['spacing'] * 1000:.1f} mm apart")
+    else:
+        n = int(round(shape["cells"] ** 0.5))
+        text = f"a flat sheet: {n}×{n} fire cells"
+    if shape["couples"]:
+        text += f", {shape['couples']} lattice couples"
+    return text
+
+
+def explain_core_error(text: str, lattice: int) -> str:
+    """A failure of the core, with the panel's words where the core names its own arguments:
+    'lattice' is Motion Detail, 'cells' Fire Detail."""
+    out = f"the simulation failed: {text}"
+    if "lattice" in text:
+        now = "0: the core's choice" if lattice == 0 else str(lattice)
+        out += (f". The lattice is Motion Detail (Physics > ThinBurn, now {now}): set it "
+                f"{'higher' if lattice else 'yourself'}, e.g. 9 or more, or change Fire Detail")
+    elif "cells" in text:
+        out += ". The cells are Fire Detail (Physics > ThinBurn)"
+    return out
+
+
 class BakeJob:
     """Bake ``obj`` frame by frame; the previous bake is replaced only when all frames are in."""
 
@@ -109,7 +135,12 @@ class BakeJob:
             raise
         self.n_vertices = len(world)
         self.inverse = np.linalg.inv(self.matrix)
-        self.spacing = 0.5 * float(np.ptp(world, axis=0).max()) / settings.cells
+        # Igniter paths are sampled half a cell apart: an estimate until the core says.
+        self.spacing = 0.5 * inputs.cell_spacing(world, tris, settings.cells)
+        self.lattice = int(settings.lattice)
+        self.max_strain = self.max_strain_frame = None  # set when a moving bake finishes
+        self.shape = None  # what the core made of the sheet (worker.simulation_shape)
+        self.stretch = stretch.StretchMeter(world, inputs.mesh_edges(obj)) if self.shell else None
         self.want_particles = core_has_particles() and self.shell
         self.particle_frames = []
         self.samples = {}
@@ -244,8 +275,14 @@ class BakeJob:
                     self._fail("the bake thread stopped without a result")
                 return
             kind = msg[0]
-            if kind == "frame":
+            if kind == "built":
+                self.shape = msg[1]
+                if self.shape["spacing"] > 0:
+                    self.spacing = 0.5 * self.shape["spacing"]
+            elif kind == "frame":
                 _, index, positions, lit, particles = msg
+                if self.stretch is not None:
+                    self.stretch.add(positions, self.frames[index])
                 self.writer.append(self._to_local(positions))
                 self.lit += lit
                 if particles is not None:
@@ -256,7 +293,7 @@ class BakeJob:
             elif kind == "done":
                 self._finish(msg[1], msg[2])
             elif kind == "error":
-                self._fail(f"the simulation failed: {msg[1]}")
+                self._fail(explain_core_error(msg[1], self.lattice))
 
     def _to_local(self, world: np.ndarray) -> np.ndarray:
         inv = self.inverse
@@ -284,6 +321,8 @@ class BakeJob:
         if self.want_particles:
             fire.apply_particles(obj, self.modifier_path, self.particle_frames, start)
         obj.thinburn.baked_file = self.modifier_path
+        obj.thinburn.baked_shape = "" if self.shape is None else describe_shape(self.shape)
+        obj.thinburn.baked_strain = 0.0
         materials.record_bake(obj)
         self._restore_frame()
         self.finished = True
@@ -291,8 +330,17 @@ class BakeJob:
         ignited = int(np.count_nonzero(ignite < cache.NEVER_FRAME))
         self.message = (f"ThinBurn: baked '{self.obj_name}' frames {self.frames[0]}–{self.frames[-1]} "
                         f"in {self.elapsed:.1f} s; {ignited} of {self.n_vertices} vertices caught fire")
+        if self.shape is not None:
+            self.message += "; " + describe_shape(self.shape)
         if ignited == 0:
             self.message += " (no lit igniter touched the sheet)"
+        if self.stretch is not None:
+            worst, at = self.stretch.largest(burnout)
+            self.max_strain, self.max_strain_frame = worst, at
+            obj.thinburn.baked_strain = worst
+            text = stretch.stretch_warning(self.obj_name, worst, at, self.lattice)
+            if text:
+                self.warnings.append(text)
         if self.moved_at is not None:
             what = (inputs.transform_animation(obj)
                     or f"its transform at frame {self.moved_at} is not the one at {self.frames[0]}")

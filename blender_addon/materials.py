@@ -528,6 +528,8 @@ def free_bake(obj) -> list:
             gone.append("fire particles")
     _delete_files(paths, gone)
     settings.baked_file = ""
+    settings.baked_shape = ""
+    settings.baked_strain = 0.0
     settings.baked_files.clear()
     settings.baked_objects.clear()
     settings.baked_blend = ""

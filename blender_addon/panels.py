@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import bpy
 
-from . import inputs, job, materials
+from . import inputs, job, materials, stretch
 from .operators import running_job
 from .properties import DYNAMIC_PARAMS, MATERIAL_FIELDS, MODEL_PARAMS
 
@@ -132,6 +132,12 @@ class PHYSICS_PT_thinburn_cache(ThinBurnPhysicsPanel, bpy.types.Panel):
         layout.operator("thinburn.bake_all", icon="RENDER_ANIMATION")
         if settings.baked_file and obj.modifiers.get(materials.CACHE_MODIFIER):
             layout.label(text=f"Baked: {settings.baked_file}", icon="CHECKMARK")
+            if settings.baked_shape:
+                warning_free = settings.baked_strain <= stretch.WARN_STRAIN
+                text = f"As {settings.baked_shape}"
+                if settings.baked_strain > 0.0:
+                    text += f"; edges stretched up to {100 * settings.baked_strain:.0f} %"
+                layout.label(text=text, icon="INFO" if warning_free else "ERROR")
 
 
 class PHYSICS_PT_thinburn_fire(ThinBurnPhysicsPanel, bpy.types.Panel):

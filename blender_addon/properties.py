@@ -129,13 +129,16 @@ class ThinBurnSettings(bpy.types.PropertyGroup):
                     "Burns Like")
     cells: IntProperty(
         name="Fire Detail", default=128, min=8, max=1024, soft_max=512, options=STATIC,
-        description="How finely the fire spreads: the sheet is divided into this many fire cells "
-                    "per side (the paper's N, 128 there). More give finer fronts and cost more")
+        description="How finely the fire spreads: a flat sheet is divided into this many fire "
+                    "cells per side (the paper's N, 128 there); a curved shell (a lantern, a "
+                    "sphere, a folded letter) gets about as many squared on its surface. More give "
+                    "finer fronts and cost more")
     lattice: IntProperty(
         name="Motion Detail", default=0, min=0, max=257, soft_max=64, options=STATIC,
         description="How finely the sheet's motion is simulated: the lattice that carries it has "
-                    "this many couples per side (the paper's M); 0 chooses it from the sheet's "
-                    "size and the Fire Detail")
+                    "this many couples per side (the paper's M; on a curved shell about as many "
+                    "squared over its surface); 0 chooses it from the sheet's size and the Fire "
+                    "Detail")
     crumple: BoolProperty(
         name="Crumple", default=True, options=STATIC,
         description="Simulate the sheet's motion (paper §4: heat, bending, gravity, wind, fire "
@@ -229,6 +232,14 @@ class ThinBurnSettings(bpy.types.PropertyGroup):
     baked_file: StringProperty(
         name="Baked File", default="", options=STATIC,
         description="The PC2 file of the current bake (set by the bake, cleared by Free Bake)")
+    baked_shape: StringProperty(
+        name="Baked As", default="", options=STATIC,
+        description="What the core made of the sheet in the current bake: a flat sheet (the "
+                    "paper's grid) or a curved shell (cells on its surface); set by the bake")
+    baked_strain: FloatProperty(
+        name="Largest Stretch", default=0.0, options=STATIC,
+        description="The largest |length / rest length - 1| of an edge over the current bake "
+                    "(Crumple on; set by the bake)")
     # What the bake wrote, so that Free removes all of it after a rename, and the file that made
     # it, so that Free in a copy made by Save As never deletes the original's cache.
     baked_files: CollectionProperty(

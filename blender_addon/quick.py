@@ -84,9 +84,8 @@ def support_under(obj, scene, exclude) -> object:
 
 def _igniter_radius(obj, settings) -> float:
     """A few cells wide, and at least the igniter's default 2 cm."""
-    world = _world_vertices(obj)
-    extent = float(np.ptp(world, axis=0).max())
-    return max(0.02, 1.5 * extent / settings.cells)
+    world, tris, _ = inputs.sheet_geometry(obj)
+    return max(0.02, 1.5 * inputs.cell_spacing(world, tris, settings.cells))
 
 
 def _igniters(obj, points, frame) -> list:

@@ -48,7 +48,7 @@ def scene_spec(obj, context=None):
         params = {key: float(getattr(settings, key)) for key in properties.MODEL_PARAMS}
         if shell:
             params.update(inputs.dynamics(scene, settings))
-        spacing = 0.5 * float(np.ptp(world, axis=0).max()) / settings.cells
+        spacing = 0.5 * inputs.cell_spacing(world, tris, settings.cells)
         samples = [inputs.sample_frame(scene, f, obj.name, igniters, winds) for f in frames]
     finally:
         scene.frame_set(restore)

@@ -52,11 +52,29 @@ def path_ignitions(start, end, t0: float, dt: float, spacing: float) -> list:
     return out
 
 
+def simulation_shape(sim) -> dict:
+    """What the core made of the sheet: ``geometry`` ("plane": the paper's N×N grid over a flat
+    sheet; "surface": cells on a curved shell's surface), ``cells`` (how many), ``spacing`` (m
+    between neighbouring cells) and ``couples`` (the lattice's; 0 without motion). A core
+    without shells (no ``geometry``) is "plane"."""
+    geometry = getattr(sim, "geometry", "plane")
+    n = int(sim.cells)
+    cells = int(getattr(sim, "num_cells", n * n))
+    spacing = float(getattr(sim, "cell_spacing", 0.0))
+    try:
+        couples = int(getattr(sim, "lattice_couples", 0))
+    except (ValueError, RuntimeError):  # shell=False: no lattice
+        couples = 0
+    return dict(geometry=geometry, cells=cells, spacing=spacing, couples=couples)
+
+
 class CoreWorker(threading.Thread):
     """Builds the Simulation, then runs the queued FrameTasks in order.
 
-    Messages on ``results`` (tuples): ("frame", index, positions, lit, particles or None),
-    ("done", ignition_times, burnout_times), ("error", text), ("cancelled",).
+    Messages on ``results`` (tuples): ("built", shape) once the Simulation exists (its
+    geometry, cells and couples: ``simulation_shape``), then ("frame", index, positions, lit,
+    particles or None), ("done", ignition_times, burnout_times), ("error", text),
+    ("cancelled",).
     """
 
     def __init__(self, make_simulation, dt: float, want_particles: bool):
@@ -75,6 +93,7 @@ class CoreWorker(threading.Thread):
     def run(self) -> None:
         try:
             sim = self._make_simulation()
+            self.results.put(("built", simulation_shape(sim)))
             while not self._cancel.is_set():
                 task = self.tasks.get()
                 if task is None or self._cancel.is_set():

@@ -160,3 +160,130 @@ def modal_harness(addon, job, queue=()):
 def worker_busy(job) -> bool:
     """The bake's worker still runs or has results not yet taken."""
     return job.worker.is_alive() or not job.worker.results.empty()
+
+
+# --- curved shells (issue #11): what an artist burns besides a flat sheet ----------------------
+def make_box_table(top=0.0, size=1.0, name="Table"):
+    """A box (Blender's cube) whose top face is at z = top, to stand shells on."""
+    import bpy
+    bpy.ops.mesh.primitive_cube_add(size=1.0, location=(0.0, 0.0, top - 0.025))
+    table = bpy.context.active_object
+    table.name = name
+    table.scale = (size, size, 0.05)
+    bpy.context.view_layer.update()
+    return table
+
+
+def _loop_cut_vertical(obj, cuts):
+    """Loop cuts (Ctrl+R) across a cylinder's side: every vertical edge cut ``cuts`` times."""
+    import bmesh
+    bm = bmesh.new()
+    bm.from_mesh(obj.data)
+    edges = [e for e in bm.edges
+             if abs(e.verts[0].co.z - e.verts[1].co.z) > 0.5 * (e.verts[0].co - e.verts[1].co).length]
+    bmesh.ops.subdivide_edges(bm, edges=edges, cuts=cuts, use_grid_fill=True)
+    bm.to_mesh(obj.data)
+    bm.free()
+    obj.data.update()
+
+
+def make_lantern(name="Lantern", radius=0.1, depth=0.3, segments=96, cuts=31, bottom=0.0):
+    """A paper lantern: Blender's cylinder without caps (Cap Fill Type: Nothing), standing on
+    z = bottom, its side cut into ``cuts + 1`` rings of quads (segments × (cuts + 2) vertices)."""
+    import bpy
+    bpy.ops.mesh.primitive_cylinder_add(vertices=segments, radius=radius, depth=depth,
+                                        end_fill_type="NOTHING",
+                                        location=(0.0, 0.0, bottom + depth / 2))
+    obj = bpy.context.active_object
+    obj.name = obj.data.name = name
+    _loop_cut_vertical(obj, cuts)
+    return obj
+
+
+def make_uv_sphere(name="Sphere", radius=0.1, segments=64, rings=32, centre=(0.0, 0.0, 0.2)):
+    import bpy
+    bpy.ops.mesh.primitive_uv_sphere_add(segments=segments, ring_count=rings, radius=radius,
+                                         location=centre)
+    obj = bpy.context.active_object
+    obj.name = obj.data.name = name
+    return obj
+
+
+def make_rect(name="Sheet", width=0.21, height=0.297, nx=43, ny=61, z=0.0):
+    """A width × height sheet of nx × ny vertices at height z, centred on the origin (A4)."""
+    import bpy
+    xs, ys = np.linspace(-width / 2, width / 2, nx), np.linspace(-height / 2, height / 2, ny)
+    verts = [(x, y, z) for y in ys for x in xs]
+    faces = [(j * nx + i, j * nx + i + 1, (j + 1) * nx + i + 1, (j + 1) * nx + i)
+             for j in range(ny - 1) for i in range(nx - 1)]
+    mesh = bpy.data.meshes.new(name)
+    mesh.from_pydata(verts, [], faces)
+    obj = bpy.data.objects.new(name, mesh)
+    bpy.context.scene.collection.objects.link(obj)
+    bpy.context.view_layer.objects.active = obj
+    return obj
+
+
+def make_folded(name="Letter", width=0.21, depth=0.15, fold_deg=30.0, n=41, z=0.0):
+    """A sheet folded along y = 0 (a letter): the half y < 0 lies flat at height z, the half
+    y > 0 rises at ``fold_deg`` degrees; n × n vertices, the fold on a row of vertices."""
+    import bpy
+    a = np.radians(fold_deg)
+    xs = np.linspace(-width / 2, width / 2, n)
+    ys = np.linspace(-depth, depth, n)
+    verts = []
+    for y in ys:
+        for x in xs:
+            verts.append((x, y, z) if y <= 0 else (x, y * np.cos(a), z + y * np.sin(a)))
+    faces = [(j * n + i, j * n + i + 1, (j + 1) * n + i + 1, (j + 1) * n + i)
+             for j in range(n - 1) for i in range(n - 1)]
+    mesh = bpy.data.meshes.new(name)
+    mesh.from_pydata(verts, [], faces)
+    obj = bpy.data.objects.new(name, mesh)
+    bpy.context.scene.collection.objects.link(obj)
+    bpy.context.view_layer.objects.active = obj
+    return obj
+
+
+def make_stack(name="Stack", size=0.2, gap=0.004, sheets=3, n=33, z=0.0, shift=0.01):
+    """Several flat square sheets a few mm apart in one object (disconnected pieces), each
+    shifted by ``shift`` in x and y from the one below."""
+    import bpy
+    xs = np.linspace(-size / 2, size / 2, n)
+    verts, faces = [], []
+    for k in range(sheets):
+        base = len(verts)
+        verts += [(x + k * shift, y + k * shift, z + k * gap) for y in xs for x in xs]
+        faces += [(base + j * n + i, base + j * n + i + 1, base + (j + 1) * n + i + 1,
+                   base + (j + 1) * n + i) for j in range(n - 1) for i in range(n - 1)]
+    mesh = bpy.data.meshes.new(name)
+    mesh.from_pydata(verts, [], faces)
+    obj = bpy.data.objects.new(name, mesh)
+    bpy.context.scene.collection.objects.link(obj)
+    bpy.context.view_layer.objects.active = obj
+    return obj
+
+
+def mesh_edges(obj):
+    """(e, 2) vertex indices of the mesh's edges."""
+    e = np.empty(2 * len(obj.data.edges), dtype=np.int32)
+    obj.data.edges.foreach_get("vertices", e)
+    return e.reshape(-1, 2)
+
+
+def world_vertices(obj):
+    n = len(obj.data.vertices)
+    co = np.empty(3 * n, dtype=np.float32)
+    obj.data.vertices.foreach_get("co", co)
+    mw = np.array(obj.matrix_world, dtype=np.float64)
+    return co.reshape(n, 3).astype(np.float64) @ mw[:3, :3].T + mw[:3, 3]
+
+
+def edge_strain(rest, frames, edges):
+    """max |length / rest length - 1| over the edges, per frame of ``frames`` (k, n, 3)."""
+    l0 = np.linalg.norm(rest[edges[:, 0]] - rest[edges[:, 1]], axis=1)
+    out = []
+    for pos in frames:
+        l1 = np.linalg.norm(pos[edges[:, 0]] - pos[edges[:, 1]], axis=1)
+        out.append(float(np.max(np.abs(l1 / l0 - 1.0))))
+    return np.array(out)

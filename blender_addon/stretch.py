@@ -1,0 +1,59 @@
+"""How far a bake stretched the sheet's edges, and a warning when it went too far. No bpy here.
+
+Paper and cloth hardly stretch: an edge of the mesh that grows to 1.5× its rest length (or
+shrinks to half) in a baked frame means the motion misbehaved there (a lattice too coarse for
+the shell's shape, or more crumpling than its couples can carry). The bake measures every
+edge in every frame, on the main thread as the frames come in, and keeps per edge the
+largest strain and its frame; edges between burnt-out vertices (holes, ash) do not count.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+WARN_STRAIN = 0.5  # |length / rest length - 1| above which the bake's report warns
+
+
+class StretchMeter:
+    """Per edge of the mesh, the largest |length / rest - 1| over the frames fed to it."""
+
+    def __init__(self, rest: np.ndarray, edges: np.ndarray):
+        rest = np.asarray(rest, dtype=np.float64)
+        edges = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
+        length = np.linalg.norm(rest[edges[:, 0]] - rest[edges[:, 1]], axis=1)
+        keep = length > 1e-9  # a zero-length edge (merged vertices) has no strain
+        self.edges = edges[keep]
+        self.rest = length[keep]
+        self.worst = np.zeros(len(self.edges))
+        self.worst_frame = np.zeros(len(self.edges))
+
+    def add(self, positions: np.ndarray, frame: float) -> None:
+        p = np.asarray(positions, dtype=np.float64)
+        e = self.edges
+        strain = np.abs(np.linalg.norm(p[e[:, 0]] - p[e[:, 1]], axis=1) / self.rest - 1.0)
+        more = strain > self.worst
+        self.worst[more] = strain[more]
+        self.worst_frame[more] = frame
+
+    def largest(self, burnout_frames=None) -> tuple:
+        """(strain, frame) of the most stretched edge; with ``burnout_frames`` (per vertex), an
+        edge counts only while one of its vertices has not burnt out."""
+        worst = self.worst
+        if burnout_frames is not None and len(worst):
+            b = np.asarray(burnout_frames, dtype=np.float64)
+            gone = np.maximum(b[self.edges[:, 0]], b[self.edges[:, 1]])  # both burnt out
+            worst = np.where(self.worst_frame < gone, worst, 0.0)
+        if not len(worst) or not np.any(worst > 0):
+            return 0.0, None
+        k = int(np.argmax(worst))
+        return float(worst[k]), float(self.worst_frame[k])
+
+
+def stretch_warning(name: str, strain: float, frame, lattice: int) -> str | None:
+    """The report's words for a bake that stretched an edge by more than WARN_STRAIN."""
+    if frame is None or strain <= WARN_STRAIN:
+        return None
+    motion = "0: the core's choice" if lattice == 0 else f"{lattice}"
+    return (f"'{name}' stretched: an edge reached {1.0 + strain:.1f}× its rest length at frame "
+            f"{frame:.0f} (paper hardly stretches), so the motion misbehaved there. Lower Crumple "
+            f"Amount (ThinBurn > Motion; e.g. 0.3), or set Motion Detail (now {motion}) to another "
+            "value such as 9, or switch Crumple off to burn the sheet in its rest shape")
