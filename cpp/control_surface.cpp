@@ -149,8 +149,10 @@ void ControlSurface::gather(int start, std::vector<int>& out, std::vector<int>& 
   }
 }
 
-SurfaceEmbedding ControlSurface::embed(const RowMatX3& points) const {
+SurfaceEmbedding ControlSurface::embed(const RowMatX3& points, const std::vector<int>& seeds) const {
   if (!points.allFinite()) throw std::invalid_argument("points must be finite");
+  if (!seeds.empty() && seeds.size() != static_cast<std::size_t>(points.rows()))
+    throw std::invalid_argument("seeds: one couple per point expected");
   const Eigen::Index n = points.rows();
   SurfaceEmbedding e;
   e.couple.assign(std::size_t(n) * kS, 0);
@@ -167,7 +169,7 @@ SurfaceEmbedding ControlSurface::embed(const RowMatX3& points) const {
   std::vector<std::pair<double, int>> win;
   for (Eigen::Index i = 0; i < n; ++i) {
     const Eigen::Vector3d x = points.row(i).transpose();
-    const int c0 = coarse_->nearest(x);
+    const int c0 = seeds.empty() || seeds[i] < 0 || seeds[i] >= coarse_->size() ? coarse_->nearest(x) : seeds[i];
     gather(c0, cand, stamp, id);
     // Widen the window until three couples see the point (a point far out at a piece's rim).
     double R = R0;

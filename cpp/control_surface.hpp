@@ -63,8 +63,11 @@ class ControlSurface {
   /// couples of their most curved edge's turn (the angle between its ends' normals over its
   /// length, 1/m).
   double edge_curvature(double quantile) const;
-  /// @brief Embed rest points lying on (or near) the shell.
-  SurfaceEmbedding embed(const RowMatX3& points) const;
+  /// @brief Embed rest points lying on (or near) the shell. seeds: per point a couple of its own
+  /// piece of the shell near it (its window's rings start there), or empty: the nearest couple.
+  /// Sheets stacked closer than the couples' spacing need seeds, else a point may take the
+  /// sheet above's couples.
+  SurfaceEmbedding embed(const RowMatX3& points, const std::vector<int>& seeds = {}) const;
   /// @brief Deformed positions of all embedded points from the lattice's control positions;
   /// heights below z_min are raised to it. Parallel over points, bit-identical for any count.
   void deform(const SurfaceEmbedding& e, const RowMatX3& control, RowMatX3& out,

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numeric>
 #include <stdexcept>
 #include <string>
 
@@ -92,10 +93,12 @@ Shell::Shell(const SurfaceCells& cells, const RowMatX3& vertices, const RowMatX3
     control_ = std::make_unique<ControlSurface>(vertices, faces, spacing, thickness_);
   }
   lattice_ = std::make_unique<FfdLattice>(FfdLattice::on_surface(control_->couples(), control_->rest()));
-  surface_vertices_ = control_->embed(vertices);
+  std::vector<int> vertex_seed, cell_seed;
+  piece_seeds(cells, faces, &vertex_seed, &cell_seed);
+  surface_vertices_ = control_->embed(vertices, vertex_seed);
   RowMatX3 centres(cells.size(), 3);
   for (int c = 0; c < cells.size(); ++c) centres.row(c) = cells.positions()[c].transpose();
-  surface_cells_ = control_->embed(centres);
+  surface_cells_ = control_->embed(centres, cell_seed);
   cell_area_ = cells.areas();
   const double paper_cell = cells.total_area() / (kPaperCells * kPaperCells);
   const double per_paper_cell = (cells.total_area() / cells.size()) / paper_cell;
@@ -126,6 +129,68 @@ void Shell::set_floor_offsets() {
     offset[v] = rest(v, 2) - z_low + 0.5 * thickness_;
   }
   dynamics_->set_floor_offsets(offset);
+}
+
+namespace {
+
+struct UnionFind {
+  std::vector<int> up;
+  explicit UnionFind(int n) : up(n) { std::iota(up.begin(), up.end(), 0); }
+  int root(int a) {
+    while (up[a] != a) a = up[a] = up[up[a]];
+    return a;
+  }
+  void join(int a, int b) { up[root(a)] = root(b); }
+};
+
+// The corner of a vertex's interpolation triangle with the largest weight: a cell of its region.
+int main_cell(const SurfaceCells& s, int vertex) {
+  const auto& w = s.vertex_weights()[vertex];
+  const int k = w[1] > w[0] ? (w[2] > w[1] ? 2 : 1) : (w[2] > w[0] ? 2 : 0);
+  return s.vertex_cells()[vertex][k];
+}
+
+}  // namespace
+
+void Shell::piece_seeds(const SurfaceCells& cells, const RowMatX3i& faces, std::vector<int>* vertex_seed,
+                        std::vector<int>* cell_seed) const {
+  // Which piece of the shell (a sheet of a stack) each input vertex, fire cell and couple is on:
+  // one union-find over all three, joined along the mesh's faces, the cells' and the couples'
+  // neighbour graphs and each vertex's interpolation corners (which weld UV seams). A vertex's
+  // seed is its own region's couple; a fire cell's, the nearest couple of its own piece.
+  const SurfaceCells& coarse = control_->cells();
+  const int nv = static_cast<int>(cells.vertex_cells().size()), nf = cells.size(), nc = coarse.size();
+  UnionFind uf(nv + nf + nc);
+  for (Eigen::Index f = 0; f < faces.rows(); ++f)
+    for (int k = 0; k < 3; ++k) uf.join(faces(f, k), faces(f, (k + 1) % 3));
+  for (int v = 0; v < nv; ++v)
+    for (int k = 0; k < 3; ++k) {
+      uf.join(v, nv + cells.vertex_cells()[v][k]);
+      uf.join(v, nv + nf + coarse.vertex_cells()[v][k]);
+    }
+  for (int c = 0; c < nf; ++c)
+    for (int q = cells.nbr_offset()[c]; q < cells.nbr_offset()[c + 1]; ++q) uf.join(nv + c, nv + cells.nbr_index()[q]);
+  for (int c = 0; c < nc; ++c)
+    for (int q = coarse.nbr_offset()[c]; q < coarse.nbr_offset()[c + 1]; ++q)
+      uf.join(nv + nf + c, nv + nf + coarse.nbr_index()[q]);
+  vertex_seed->resize(nv);
+  for (int v = 0; v < nv; ++v) (*vertex_seed)[v] = main_cell(coarse, v);
+  std::vector<std::vector<int>> by_piece(nv + nf + nc);
+  for (int c = 0; c < nc; ++c) by_piece[uf.root(nv + nf + c)].push_back(c);
+  cell_seed->resize(nf);
+  for (int c = 0; c < nf; ++c) {
+    const Eigen::Vector3d p = cells.positions()[c];
+    int best = coarse.nearest(p);
+    const int piece = uf.root(nv + c);
+    if (uf.root(nv + nf + best) != piece) {  // the nearest couple is on another sheet
+      double d_best = std::numeric_limits<double>::infinity();
+      for (int k : by_piece[piece]) {
+        const double d = (coarse.positions()[k] - p).squaredNorm();
+        if (d < d_best) d_best = d, best = k;
+      }
+    }
+    (*cell_seed)[c] = best;
+  }
 }
 
 void Shell::finish(const std::vector<double>& cell_mass, int num_cells, const std::vector<std::uint8_t>& inside,

@@ -111,6 +111,8 @@ class Shell {
   void pin(const std::vector<std::uint8_t>& pinned);
   void set_floor_offsets();
   void find_pieces();
+  void piece_seeds(const SurfaceCells& cells, const RowMatX3i& faces, std::vector<int>* vertex_seed,
+                   std::vector<int>* cell_seed) const;
   void update_piece_rotations();
   void hand_over_masses_and_strength();
 
