@@ -26,6 +26,13 @@ int choose_lattice(int N, double size_u, double size_v) {
   return std::clamp(std::min(by_cells, by_size), 4, 65);
 }
 
+// The layer's default thickness: a quarter of the couples' spacing, at most kMaxThickness. The
+// layer's bending stiffness grows as its thickness squared (the top and bottom springs pull
+// opposite ways); at 0.25 of a 33 cm spacing a 1.4 m paper curtain pinned along its top stood
+// upright above its pins after the wind dropped (repro r10); at 1 cm it hangs again.
+constexpr double kMaxThickness = 0.01;  // m
+double default_thickness(double spacing) { return std::min(0.25 * spacing, kMaxThickness); }
+
 }  // namespace
 
 Shell::Shell(const Sheet& sheet, const ShellParams& params, const std::vector<double>& cell_mass,
@@ -35,7 +42,7 @@ Shell::Shell(const Sheet& sheet, const ShellParams& params, const std::vector<do
   M_ = params_.lattice > 0 ? params_.lattice : choose_lattice(N, sheet.size_u(), sheet.size_v());
   if (M_ < 2) throw std::invalid_argument("lattice must be >= 2");
   const double spacing = std::min(sheet.size_u(), sheet.size_v()) / (M_ - 1);
-  thickness_ = params_.lattice_thickness > 0 ? params_.lattice_thickness : 0.25 * spacing;
+  thickness_ = params_.lattice_thickness > 0 ? params_.lattice_thickness : default_thickness(spacing);
   lattice_ = std::make_unique<FfdLattice>(M_, drape());
 
   const RowMatX2& vp = sheet.vertex_param();
@@ -65,7 +72,7 @@ Shell::Shell(const SurfaceCells& cells, const RowMatX3& vertices, const RowMatX3
   double spacing = params_.lattice > 0 ? side / (params_.lattice - 1)
                                        : std::clamp(std::max(16.0 * cells.spacing(), 0.02), side / 64.0, side / 3.0);
   if (params_.lattice == 1) throw std::invalid_argument("lattice must be >= 2");
-  thickness_ = params_.lattice_thickness > 0 ? params_.lattice_thickness : 0.25 * spacing;
+  thickness_ = params_.lattice_thickness > 0 ? params_.lattice_thickness : default_thickness(spacing);
   // A chosen lattice that leaves a piece without a triangulated control surface (a small piece,
   // a mesh of two triangles) gets finer until it has one; an explicit one is refused by name.
   constexpr int kFinerTries = 6;
@@ -76,7 +83,7 @@ Shell::Shell(const SurfaceCells& cells, const RowMatX3& vertices, const RowMatX3
     } catch (const std::invalid_argument& e) {
       if (params_.lattice > 0 || attempt == kFinerTries || std::string(e.what()).rfind("lattice", 0) != 0) throw;
       spacing *= 0.6;
-      if (params_.lattice_thickness <= 0) thickness_ = 0.25 * spacing;
+      if (params_.lattice_thickness <= 0) thickness_ = default_thickness(spacing);
     }
   }
   // A chosen lattice also follows the curve: at most kMaxTurn radians between neighbouring
@@ -89,7 +96,7 @@ Shell::Shell(const SurfaceCells& cells, const RowMatX3& vertices, const RowMatX3
     const double kappa = control_->edge_curvature(kCurvedEdges);
     if (!(kappa * spacing > 1.15 * kMaxTurn) || spacing <= coarsest / kMaxRefine * 1.0001) break;
     spacing = std::max(kMaxTurn / kappa, coarsest / kMaxRefine);
-    thickness_ = params_.lattice_thickness > 0 ? params_.lattice_thickness : 0.25 * spacing;
+    thickness_ = params_.lattice_thickness > 0 ? params_.lattice_thickness : default_thickness(spacing);
     control_ = std::make_unique<ControlSurface>(vertices, faces, spacing, thickness_);
   }
   lattice_ = std::make_unique<FfdLattice>(FfdLattice::on_surface(control_->couples(), control_->rest()));
