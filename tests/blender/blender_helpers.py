@@ -209,6 +209,17 @@ def make_uv_sphere(name="Sphere", radius=0.1, segments=64, rings=32, centre=(0.0
     return obj
 
 
+def link_mesh(name, verts, faces):
+    """A mesh object from vertices and faces, linked to the scene and made active."""
+    import bpy
+    mesh = bpy.data.meshes.new(name)
+    mesh.from_pydata(verts, [], faces)
+    obj = bpy.data.objects.new(name, mesh)
+    bpy.context.scene.collection.objects.link(obj)
+    bpy.context.view_layer.objects.active = obj
+    return obj
+
+
 def make_rect(name="Sheet", width=0.21, height=0.297, nx=43, ny=61, z=0.0):
     """A width × height sheet of nx × ny vertices at height z, centred on the origin (A4)."""
     import bpy
@@ -216,12 +227,7 @@ def make_rect(name="Sheet", width=0.21, height=0.297, nx=43, ny=61, z=0.0):
     verts = [(x, y, z) for y in ys for x in xs]
     faces = [(j * nx + i, j * nx + i + 1, (j + 1) * nx + i + 1, (j + 1) * nx + i)
              for j in range(ny - 1) for i in range(nx - 1)]
-    mesh = bpy.data.meshes.new(name)
-    mesh.from_pydata(verts, [], faces)
-    obj = bpy.data.objects.new(name, mesh)
-    bpy.context.scene.collection.objects.link(obj)
-    bpy.context.view_layer.objects.active = obj
-    return obj
+    return link_mesh(name, verts, faces)
 
 
 def make_folded(name="Letter", width=0.21, depth=0.15, fold_deg=30.0, n=41, z=0.0):
@@ -237,12 +243,7 @@ def make_folded(name="Letter", width=0.21, depth=0.15, fold_deg=30.0, n=41, z=0.
             verts.append((x, y, z) if y <= 0 else (x, y * np.cos(a), z + y * np.sin(a)))
     faces = [(j * n + i, j * n + i + 1, (j + 1) * n + i + 1, (j + 1) * n + i)
              for j in range(n - 1) for i in range(n - 1)]
-    mesh = bpy.data.meshes.new(name)
-    mesh.from_pydata(verts, [], faces)
-    obj = bpy.data.objects.new(name, mesh)
-    bpy.context.scene.collection.objects.link(obj)
-    bpy.context.view_layer.objects.active = obj
-    return obj
+    return link_mesh(name, verts, faces)
 
 
 def make_stack(name="Stack", size=0.2, gap=0.004, sheets=3, n=33, z=0.0, shift=0.01):
@@ -256,12 +257,7 @@ def make_stack(name="Stack", size=0.2, gap=0.004, sheets=3, n=33, z=0.0, shift=0
         verts += [(x + k * shift, y + k * shift, z + k * gap) for y in xs for x in xs]
         faces += [(base + j * n + i, base + j * n + i + 1, base + (j + 1) * n + i + 1,
                    base + (j + 1) * n + i) for j in range(n - 1) for i in range(n - 1)]
-    mesh = bpy.data.meshes.new(name)
-    mesh.from_pydata(verts, [], faces)
-    obj = bpy.data.objects.new(name, mesh)
-    bpy.context.scene.collection.objects.link(obj)
-    bpy.context.view_layer.objects.active = obj
-    return obj
+    return link_mesh(name, verts, faces)
 
 
 def mesh_edges(obj):
