@@ -222,7 +222,6 @@ def link_mesh(name, verts, faces):
 
 def make_rect(name="Sheet", width=0.21, height=0.297, nx=43, ny=61, z=0.0):
     """A width × height sheet of nx × ny vertices at height z, centred on the origin (A4)."""
-    import bpy
     xs, ys = np.linspace(-width / 2, width / 2, nx), np.linspace(-height / 2, height / 2, ny)
     verts = [(x, y, z) for y in ys for x in xs]
     faces = [(j * nx + i, j * nx + i + 1, (j + 1) * nx + i + 1, (j + 1) * nx + i)
@@ -233,7 +232,6 @@ def make_rect(name="Sheet", width=0.21, height=0.297, nx=43, ny=61, z=0.0):
 def make_folded(name="Letter", width=0.21, depth=0.15, fold_deg=30.0, n=41, z=0.0):
     """A sheet folded along y = 0 (a letter): the half y < 0 lies flat at height z, the half
     y > 0 rises at ``fold_deg`` degrees; n × n vertices, the fold on a row of vertices."""
-    import bpy
     a = np.radians(fold_deg)
     xs = np.linspace(-width / 2, width / 2, n)
     ys = np.linspace(-depth, depth, n)
@@ -249,7 +247,6 @@ def make_folded(name="Letter", width=0.21, depth=0.15, fold_deg=30.0, n=41, z=0.
 def make_stack(name="Stack", size=0.2, gap=0.004, sheets=3, n=33, z=0.0, shift=0.01):
     """Several flat square sheets a few mm apart in one object (disconnected pieces), each
     shifted by ``shift`` in x and y from the one below."""
-    import bpy
     xs = np.linspace(-size / 2, size / 2, n)
     verts, faces = [], []
     for k in range(sheets):
