@@ -101,9 +101,10 @@ def test_the_lantern_far_side_catches_last_at_half_its_girth_over_v0(shell, seed
     # the old planar projection). With the preset's +-15 % speed noise, at 32 cells (dt 0.5 s),
     # measured: fire alone (shell=False), seeds 0-5: 0.931-1.000 x pi r / V0, later than
     # 91.0-95.7 % of the vertices (only the far top and bottom rims, hypot(pi r, h/2) = 34.8 cm
-    # away, come later: max 96-99 s); with the crumpling shell, seeds 0-3: 0.971-1.008 x,
-    # later than 92.4-95.6 %. (At the demo's 128 cells and 1/24 s steps the burnt-through
-    # lantern falls over and its far side had not caught by 240 s: see README, Shells.)
+    # away, come later: max 96-99 s); with the crumpling shell, seeds 0-3: 0.967-1.001 x,
+    # later than 92.7-95.6 % (the test allows 10 % and 85 %: the noise moves the far side by up
+    # to 7 %). At the demo's 128 cells and 1/24 s steps the lantern stays standing and its far
+    # side caught at 0.97 x, later than 95.2 % (README, Shells).
     for seed in seeds:
         t_far, t, due = _lantern_far_side(32, seed, shell)
         assert abs(t_far / due - 1.0) < 0.10

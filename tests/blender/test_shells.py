@@ -188,8 +188,9 @@ def _baked_world(addon, sheet, folder):
 @pytest.mark.parametrize("scene", ["lantern", "a4"])
 def test_crumpling_keeps_edge_lengths(addon, tmp_path, scene):
     """Two seconds of burning with Crumple on (Crumple Amount 0.3 on the lantern): no edge
-    stretches or shrinks by more than 30 % (measured: lantern 0.09, flat sheet 0.11), no
-    vertex leaves by more than 15 cm, and the bake warns of no stretch."""
+    stretches or shrinks by more than 5 % (measured: lantern 0.012, flat sheet 0.005), no
+    vertex leaves by more than 5 cm (measured: lantern 0.1 cm, flat sheet 3.1 cm), and the
+    bake warns of no stretch."""
     table = make_box_table(top=0.0)
     if scene == "lantern":
         sheet = make_lantern(radius=R, depth=0.3, segments=64, cuts=19)
@@ -206,11 +207,11 @@ def test_crumpling_keeps_edge_lengths(addon, tmp_path, scene):
     assert job.shape["geometry"] == ("surface" if scene == "lantern" else "plane")
     frames = _baked_world(addon, sheet, tmp_path / "cache")
     strain = edge_strain(frames[0], frames, mesh_edges(sheet))
-    assert strain.max() < 0.3, strain.max()
+    assert strain.max() < 0.05, strain.max()
     assert abs(job.max_strain - strain.max()) < 1e-3 or job.max_strain <= strain.max()
     assert sheet.thinburn.baked_strain == pytest.approx(job.max_strain)
     assert sheet.thinburn.baked_shape.startswith("a curved shell" if scene == "lantern" else "a flat sheet")
-    assert np.linalg.norm(frames - frames[0], axis=2).max() < 0.15
+    assert np.linalg.norm(frames - frames[0], axis=2).max() < 0.05
     assert np.abs(frames[0] - rest).max() < 1e-3  # the first frame is the rest shape (lifted 0.5 mm)
     assert not [w for w in job.warnings if "stretched" in w]
     # the Bake panel says what the sheet was baked as, and how far it stretched
