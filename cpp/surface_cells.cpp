@@ -487,8 +487,29 @@ SurfaceCells::SurfaceCells(const SurfVerts& V, const SurfFaces& F, const CellOpt
   if (opt.lloyd_iters < 0) throw std::invalid_argument("lloyd_iters must be >= 0");
   check_input(V, F);
   const double diag = (V.colwise().maxCoeff() - V.colwise().minCoeff()).norm();
+  // The faces in a canonical order (each rotated to start at its smallest vertex, orientation
+  // kept, then sorted): the cells depend on the set of triangles, not on the order a tool hands
+  // them over (Blender's triangulation order changes between runs). origin maps back to the
+  // caller's face indices for error messages.
+  std::vector<int> order(F.rows());
+  SurfFaces G(F.rows(), 3);
+  for (Eigen::Index i = 0; i < F.rows(); ++i) {
+    int k = 0;
+    if (F(i, 1) < F(i, k)) k = 1;
+    if (F(i, 2) < F(i, k)) k = 2;
+    G.row(i) << F(i, k), F(i, (k + 1) % 3), F(i, (k + 2) % 3);
+  }
+  std::iota(order.begin(), order.end(), 0);
+  std::sort(order.begin(), order.end(), [&](int a, int b) {
+    for (int k = 0; k < 3; ++k)
+      if (G(a, k) != G(b, k)) return G(a, k) < G(b, k);
+    return a < b;
+  });
+  SurfFaces sorted(F.rows(), 3);
+  for (Eigen::Index i = 0; i < F.rows(); ++i) sorted.row(i) = G.row(order[i]);
   std::vector<int> input_to_mesh, origin;
-  Mesh m = welded_mesh(V, F, opt.weld_tol * diag, &input_to_mesh, &origin);
+  Mesh m = welded_mesh(V, sorted, opt.weld_tol * diag, &input_to_mesh, &origin);
+  for (int& o : origin) o = order[o];
   for (const Face& f : m.f) area_total_ += face_area(m, f);
   if (m.f.empty() || !(area_total_ > 0.0)) throw std::invalid_argument("vertices: the mesh has zero area");
   orient(m, edge_faces(m, origin));

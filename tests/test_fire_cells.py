@@ -148,3 +148,19 @@ def test_grid_uv_still_serves_the_plane():
     v, f = rect_sheet(0.2, 0.3, nx=11, ny=15)
     sim = thinburn.Simulation(v, f, uv=grid_uv(11, 15), cells=16, geometry="plane")
     assert sim.cell_states().shape == (16, 16)
+
+
+def test_the_order_of_the_faces_changes_nothing():
+    # Blender hands a mesh's triangles over in a different order between runs: the cells, the
+    # lattice and the fire depend on the set of triangles only (bit for bit).
+    V, F = S.icosphere(4, 0.1)
+    G = np.roll(F[np.random.default_rng(1).permutation(len(F))], 1, axis=1)  # same triangles, same orientation
+    out = []
+    for faces in (F, G):
+        sim = thinburn.Simulation(V, faces, cells=32, speed_noise=0.0)
+        sim.ignite((0.1, 0.0, 0.0))
+        sim.run(5.0, dt=0.5)
+        out.append((sim.lattice_couples, sim.ignition_times(), sim.vertex_positions()))
+    assert out[0][0] == out[1][0]
+    np.testing.assert_array_equal(out[0][1], out[1][1])
+    np.testing.assert_array_equal(out[0][2], out[1][2])
