@@ -164,3 +164,16 @@ def test_the_order_of_the_faces_changes_nothing():
     assert out[0][0] == out[1][0]
     np.testing.assert_array_equal(out[0][1], out[1][1])
     np.testing.assert_array_equal(out[0][2], out[1][2])
+
+
+def test_a_shell_burns_bit_for_bit_alike_on_any_thread_count():
+    V, F = S.cylinder(r=0.1, h=0.3, nt=96, nz=36)
+    out = []
+    for threads in (1, 2, 3):
+        sim = thinburn.Simulation(V, F, cells=32, floor=0.0, threads=threads)
+        sim.ignite((0.1, 0.0, 0.15))
+        sim.run(20.0, dt=1 / 24)
+        out.append((sim.ignition_times(), sim.vertex_positions(), sim.lattice_positions()))
+    for other in out[1:]:
+        for a, b in zip(out[0], other):
+            np.testing.assert_array_equal(a, b)
