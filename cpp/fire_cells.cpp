@@ -62,11 +62,13 @@ Eigen::Vector3d GridCells::normal_from_neighbours(int cell, const CellView& view
 }
 
 double GridCells::grad2(int cell, const CellView& view) const {
-  // Rise over run of the current surface out of the rest plane, along rows and columns,
+  // Rise over run of the current surface out of the (turned) rest plane, along rows and columns,
   // from central differences (one-sided at the outline), squared and summed: |grad h|².
   const int N = sheet_->cells(), r = cell / N, c = cell % N;
   const auto& in = sheet_->inside();
-  const Eigen::Vector3d& n = sheet_->frame().n;
+  // The rest plane's normal, turned with the sheet as a whole (a curtain the wind lifts is not
+  // steeper for it; its folds are).
+  const Eigen::Vector3d n = view.reference_normal(cell);
   auto slope2 = [&](int a, int b) {
     if (a == b) return 0.0;
     const Eigen::Vector3d d = view.position(b) - view.position(a);

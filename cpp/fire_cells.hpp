@@ -31,8 +31,9 @@ double seeded_uniform(std::uint64_t seed, std::uint64_t stream, std::uint64_t ke
 struct CellView {
   std::function<Eigen::Vector3d(int)> position;
   std::function<Eigen::Vector3d(int)> normal;
-  /// The cell's rest normal turned with its piece of the shell as a whole: eq 1's slope is the
-  /// turn away from it, so a lantern that tips over is not slowed, its curl is.
+  /// The rest shape's normal at the cell (a grid's rest plane, a surface cell's own) turned with
+  /// its piece of the shell as a whole: eq 1's slope is the turn away from it, so a lantern that
+  /// tips over or a curtain the wind lifts is not slowed, their curls and folds are.
   std::function<Eigen::Vector3d(int)> reference_normal;
 };
 

@@ -59,6 +59,7 @@ Shell::Shell(const Sheet& sheet, const ShellParams& params, const std::vector<do
   // is the paper's Cp.
   const double per_paper_cell = static_cast<double>(kPaperCells) / N;
   finish(cell_mass, N * N, sheet.inside(), grid_topology(M_), per_paper_cell * per_paper_cell);
+  find_pieces();
   if (!pinned.empty()) pin(pinned);
 }
 
@@ -440,12 +441,12 @@ void Shell::step(double dt, const ShellSources& src, const Eigen::Vector3d& wind
   for (Eigen::Index c = 0; c < rotation_.size(); ++c)
     if (std::abs(rotation_[c] - applied_rotation_[c]) >= kRotationQuantum) applied_rotation_[c] = rotation_[c];
   stats_ = dynamics_->step(dt, applied_rotation_, bending_->heat_rate());
-  if (control_) update_piece_rotations();
+  update_piece_rotations();
 }
 
 void Shell::find_pieces() {
-  // Connected pieces of the control surface (its structure springs), breadth-first.
-  const LatticeTopology& t = control_->topology();
+  // Connected pieces of the lattice (its couple neighbours), breadth-first: one on a grid.
+  const LatticeTopology& t = dynamics_->topology();
   const int C = t.couples;
   piece_of_.assign(C, -1);
   int pieces = 0;
@@ -500,7 +501,7 @@ void Shell::update_piece_rotations() {
 }
 
 Eigen::Vector3d Shell::turned_rest_normal(int cell, const Eigen::Vector3d& rest_normal) const {
-  if (!control_) return rest_normal;
+  if (!control_) return piece_rotation_[0] * rest_normal;
   // The piece of the couple carrying the largest share of the cell.
   constexpr int S = SurfaceEmbedding::kStencil;
   int best = 0;

@@ -69,8 +69,8 @@ class Shell {
   Eigen::Vector3d cell_position(int cell) const;
   /// @brief Control surface: the layer's normal at a cell now (bottom -> top).
   Eigen::Vector3d cell_normal(int cell) const;
-  /// @brief A cell's rest normal turned as its piece of the shell turned as a whole (its best
-  /// rigid rotation since rest); the rest normal itself on a grid lattice.
+  /// @brief A normal at a cell turned as its piece of the shell turned as a whole (its best
+  /// rigid rotation since rest; a grid lattice is one piece).
   Eigen::Vector3d turned_rest_normal(int cell, const Eigen::Vector3d& rest_normal) const;
   /// @brief Grid lattice: per control cell ((M-1)^2 rows), the lowest and highest
   /// displacement its cells can have now: their four couples' extremes.

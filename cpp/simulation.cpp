@@ -78,8 +78,11 @@ void Simulation::bind_cells() {
   surface_ = dynamic_cast<const ShellCells*>(cells_.get());
   view_.position = [this](int c) { return cell_position(c); };
   view_.normal = [this](int c) { return cell_normal(c); };
+  // Eq 1's slope is measured from the rest shape turned with its piece: on the grid the rest
+  // plane's normal, on a surface the cell's own rest normal.
   view_.reference_normal = [this](int c) {
-    return shell_ ? shell_->turned_rest_normal(c, cells_->rest_normal(c)) : cells_->rest_normal(c);
+    const Eigen::Vector3d n0 = grid_ ? grid_->sheet().frame().n : cells_->rest_normal(c);
+    return shell_ ? shell_->turned_rest_normal(c, n0) : n0;
   };
   law_.v = [this](int c) { return cell_speed(c); };
   law_.max_drive = params_.max_drive;

@@ -127,16 +127,16 @@ def test_a_burning_shell_crumples_without_leaving_its_layer_or_stretching(shape)
 
 
 def test_paper_lit_at_a_corner_curls_at_the_edge_and_stays_flat_elsewhere():
-    # Issue #12's default: over 40 s the unburnt paper rises at most 1.4 cm above the table
-    # (measured 1.39 cm) and its edges keep their length within 0.53 % (p99; 6.9 % at the old
-    # defaults, which rolled the sheet into a tube).
+    # Issue #12's default: over 40 s the unburnt paper rises at most 1.1 cm above the table
+    # (measured 0.98 cm) and its edges keep their length within 0.5 % (p99, measured 0.42 %;
+    # 6.9 % at the old defaults, which rolled the sheet into a tube).
     from thinburn.scenes import rect_sheet
 
     V, F = rect_sheet()
     sim, strain, _, rise = _burn_shell(V, F, [0.0, 0.0, 0.0], floor=0.0)
     assert sim.geometry == "plane"
-    assert strain < 0.006
-    assert rise < 0.015
+    assert strain < 0.005
+    assert rise < 0.011
 
 
 def test_a_stack_of_sheets_closer_than_its_couples_keeps_each_sheet_in_its_own_lattice():

@@ -198,7 +198,7 @@ class Simulation:
         _set_group(p.set_dynamics, "material", material_dynamics)
         # The curl rolls across the front, at most CURL_MAX_ROTATION between neighbouring couples:
         # a lattice bent further squashes the sheet it carries (a chord is shorter than its arc),
-        # measured unburnt-edge strain p99 at 40 s, 96 cells: A4 on a table 6.9 % -> 0.5 %, a
+        # measured unburnt-edge strain p99 at 40 s, 96 cells: A4 on a table 7.8 % -> 0.5 %, a
         # lantern 13 % -> 1.6 %, a sphere 9.3 % -> 0.5 % (scripts/shell_strain.py, docs/dynamics.md §2).
         _set_group(p.set_bending, "material", dict(cp=mat.Cp, alpha=mat.alpha, beta=mat.beta,
                                                    max_rotation=CURL_MAX_ROTATION))
