@@ -158,9 +158,12 @@ def test_bake_all_from_the_ui_bakes_one_sheet_after_another(addon, tmp_path):
     finally:
         addon.operators._running.clear()
     assert result == {"FINISHED"}, reports
-    assert seen == {"A", "B"}
+    # The timer may first look after A has already finished (a 4-frame bake on a fast machine),
+    # so the polled names need only hold B; the reports name both bakes, A first.
+    assert "B" in seen and seen <= {"A", "B"}
     assert all(s.modifiers.get("ThinBurn Cache") for s in sheets)
-    assert [t for _, t in reports if "baked" in t] and len([t for _, t in reports if "baked" in t]) == 2
+    baked = [t for _, t in reports if "baked" in t]
+    assert len(baked) == 2 and "'A'" in baked[0] and "'B'" in baked[1]
     assert any("'B'" in s for s in status if s) and status[-1] is None
 
 
