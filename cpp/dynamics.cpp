@@ -204,6 +204,9 @@ void LatticeDynamics::build_bimetal() {
     off_a_[s] = offset(sa_[s]);
     off_b_[s] = offset(sb_[s]);
   }
+  grad_dir_ = RowMatX3::Zero(C, 3);
+  grad_share_ = Eigen::VectorXd::Zero(C);
+  changed_.assign(C, 0);
   couple_spacing_ = Eigen::VectorXd::Zero(C);
   for (int c = 0; c < C; ++c) {
     double sum = 0.0;
@@ -244,8 +247,6 @@ void LatticeDynamics::apply_bimetal(const Eigen::VectorXd& D, bool all) {
   // gradient); where D is flat across a couple (|grad D| spacing << kAnisotropicTurn) the
   // factor blends to 1/2, the mean over directions.
   const int C = topo_.couples;
-  if (grad_dir_.rows() != C) grad_dir_ = RowMatX3::Zero(C, 3), grad_share_ = Eigen::VectorXd::Zero(C);
-  if (changed_.size() != static_cast<std::size_t>(C)) changed_.assign(C, 0);
   const RowMatX3& r = lat_.rest();
   auto centre = [&](int c) { return Eigen::Vector3d(0.5 * (r.row(2 * c) + r.row(2 * c + 1)).transpose()); };
   for (int c = 0; c < C; ++c) {

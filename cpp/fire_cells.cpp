@@ -169,23 +169,6 @@ double ShellCells::noise(int cell, std::uint64_t seed, std::uint64_t stream) con
   return kSmoothShare * smooth + (1.0 - kSmoothShare) * seeded_uniform(seed, stream, static_cast<std::uint64_t>(cell));
 }
 
-Eigen::Vector3d ShellCells::normal_from_neighbours(int cell, const CellView& view) const {
-  // Area-weighted normal of the cell's fan of triangles now, oriented as at rest.
-  Eigen::Vector3d n = Eigen::Vector3d::Zero();
-  const Eigen::Vector3d n0 = rest_normal(cell);
-  for (int q = cells_->fan_offset()[cell]; q < cells_->fan_offset()[cell + 1]; ++q) {
-    const auto& t = cells_->triangles()[cells_->fan_index()[q]];
-    const Eigen::Vector3d a = view.position(t[0]), b = view.position(t[1]), c = view.position(t[2]);
-    Eigen::Vector3d m = (b - a).cross(c - a);
-    // Triangle corners are stored sorted, not oriented: orient each by its rest normal.
-    const Eigen::Vector3d m0 = (rest(t[1]) - rest(t[0])).cross(rest(t[2]) - rest(t[0]));
-    if (m0.dot(n0) < 0) m = -m;
-    n += m;
-  }
-  const double len = n.norm();
-  return len > 0 ? Eigen::Vector3d(n / len) : n0;
-}
-
 double ShellCells::grad2(int cell, const CellView& view) const {
   // The grid's |grad h|^2 is tan^2 of the angle the surface turned out of its rest plane; on a
   // shell, the angle its normal turned from the rest normal, less the turn of its whole piece.

@@ -65,9 +65,6 @@ class FireCells {
   virtual double total_area() const = 0;
   /// @brief Smooth seeded noise in [-1, 1] over about 10 cells, plus a little per-cell grain.
   virtual double noise(int c, std::uint64_t seed, std::uint64_t stream) const = 0;
-  /// @brief The cell's normal now, from the cells around it (view.position); `view.normal` is
-  /// not called.
-  virtual Eigen::Vector3d normal_from_neighbours(int c, const CellView& view) const = 0;
   /// @brief grad^2 of eq 1: the squared slope of the surface now out of its rest shape.
   virtual double grad2(int c, const CellView& view) const = 0;
   /// @brief A burning cell is on the fringe when a neighbour inside is still unburnt (state 0).
@@ -111,7 +108,8 @@ class GridCells final : public FireCells {
   double reach() const override;
   double total_area() const override { return sheet_->area(); }
   double noise(int c, std::uint64_t seed, std::uint64_t stream) const override;
-  Eigen::Vector3d normal_from_neighbours(int c, const CellView& view) const override;
+  /// @brief The cell's normal now, from its grid neighbours' positions (view.position).
+  Eigen::Vector3d normal_from_neighbours(int c, const CellView& view) const;
   double grad2(int c, const CellView& view) const override;
   bool on_fringe(int c, const std::vector<std::uint8_t>& state) const override;
   void ignite(int c, double t0, const SpreadLaw& law, const CellView& view) override;
@@ -149,7 +147,6 @@ class ShellCells final : public FireCells {
   double reach() const override { return 3.0 * cells_->spacing(); }
   double total_area() const override { return cells_->total_area(); }
   double noise(int c, std::uint64_t seed, std::uint64_t stream) const override;
-  Eigen::Vector3d normal_from_neighbours(int c, const CellView& view) const override;
   double grad2(int c, const CellView& view) const override;
   bool on_fringe(int c, const std::vector<std::uint8_t>& state) const override;
   void ignite(int c, double t0, const SpreadLaw& law, const CellView& view) override;

@@ -464,6 +464,17 @@ void Shell::find_pieces() {
     ++pieces;
   }
   piece_rotation_.assign(pieces, Eigen::Matrix3d::Identity());
+  // A surface cell's piece: that of the couple carrying the largest share of it (a grid
+  // lattice is one piece: cell_piece_ stays empty).
+  if (!control_) return;
+  constexpr int S = SurfaceEmbedding::kStencil;
+  cell_piece_.resize(surface_cells_.size());
+  for (Eigen::Index cell = 0; cell < surface_cells_.size(); ++cell) {
+    int best = 0;
+    for (int q = 1; q < S; ++q)
+      if (surface_cells_.share[std::size_t(cell) * S + q] > surface_cells_.share[std::size_t(cell) * S + best]) best = q;
+    cell_piece_[cell] = piece_of_[surface_cells_.couple[std::size_t(cell) * S + best]];
+  }
 }
 
 void Shell::update_piece_rotations() {
@@ -476,21 +487,20 @@ void Shell::update_piece_rotations() {
   std::vector<double> m(P, 0.0);
   auto mid = [](const RowMatX3& y, int k) { return Eigen::Vector3d(0.5 * (y.row(2 * k) + y.row(2 * k + 1)).transpose()); };
   const int C = static_cast<int>(piece_of_.size());
+  Eigen::VectorXd w(C);  // a couple's mass (a massless one still counts a little)
+  for (int k = 0; k < C; ++k) w[k] = control_mass_[2 * k] + control_mass_[2 * k + 1] + 1e-12;
   for (int k = 0; k < C; ++k) {
-    const double w = control_mass_[2 * k] + control_mass_[2 * k + 1] + 1e-12;
-    c[piece_of_[k]] += w * mid(x, k);
-    c0[piece_of_[k]] += w * mid(x0, k);
-    m[piece_of_[k]] += w;
+    c[piece_of_[k]] += w[k] * mid(x, k);
+    c0[piece_of_[k]] += w[k] * mid(x0, k);
+    m[piece_of_[k]] += w[k];
   }
   std::vector<Eigen::Matrix3d> H(P, Eigen::Matrix3d::Zero());
   for (int p = 0; p < P; ++p) c[p] /= m[p], c0[p] /= m[p];
   for (int k = 0; k < C; ++k) {
     const int p = piece_of_[k];
-    const double w = control_mass_[2 * k] + control_mass_[2 * k + 1] + 1e-12;
-    H[p] += w * (mid(x0, k) - c0[p]) * (mid(x, k) - c[p]).transpose();
+    H[p] += w[k] * (mid(x0, k) - c0[p]) * (mid(x, k) - c[p]).transpose();
     // The couples' axes too, so that a piece of coplanar couples has a defined turn about them.
-    H[p] += w * thickness_ * thickness_ * (x0.row(2 * k + 1) - x0.row(2 * k)).transpose() *
-            (x.row(2 * k + 1) - x.row(2 * k)) / (thickness_ * thickness_);
+    H[p] += w[k] * (x0.row(2 * k + 1) - x0.row(2 * k)).transpose() * (x.row(2 * k + 1) - x.row(2 * k));
   }
   for (int p = 0; p < P; ++p) {
     Eigen::JacobiSVD<Eigen::Matrix3d> svd(H[p], Eigen::ComputeFullU | Eigen::ComputeFullV);
@@ -501,13 +511,7 @@ void Shell::update_piece_rotations() {
 }
 
 Eigen::Vector3d Shell::turned_rest_normal(int cell, const Eigen::Vector3d& rest_normal) const {
-  if (!control_) return piece_rotation_[0] * rest_normal;
-  // The piece of the couple carrying the largest share of the cell.
-  constexpr int S = SurfaceEmbedding::kStencil;
-  int best = 0;
-  for (int q = 1; q < S; ++q)
-    if (surface_cells_.share[std::size_t(cell) * S + q] > surface_cells_.share[std::size_t(cell) * S + best]) best = q;
-  return piece_rotation_[piece_of_[surface_cells_.couple[std::size_t(cell) * S + best]]] * rest_normal;
+  return piece_rotation_[cell_piece_.empty() ? 0 : cell_piece_[cell]] * rest_normal;
 }
 
 Shell::Checkpoint Shell::checkpoint() const {

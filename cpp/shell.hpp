@@ -120,7 +120,8 @@ class Shell {
   std::unique_ptr<ControlSurface> control_;   // control surface
   SurfaceEmbedding surface_vertices_, surface_cells_;
   std::vector<double> cell_area_;
-  std::vector<int> piece_of_;                  // control surface: per couple, its connected piece
+  std::vector<int> piece_of_;                  // per couple, its connected piece
+  std::vector<int> cell_piece_;                // control surface: per fire cell, its piece
   std::vector<Eigen::Matrix3d> piece_rotation_;  // per piece: its rigid rotation since rest
   ShellParams params_;
   int M_ = 0;

@@ -158,7 +158,7 @@ Eigen::Vector3d Simulation::cell_normal(int cell) const {
   if (!shell_) return cells_->rest_normal(cell);
   // On a control surface the layer's own normal there; on the grid, from the neighbours.
   if (shell_->control_surface()) return shell_->cell_normal(cell);
-  return cells_->normal_from_neighbours(cell, view_);
+  return grid_->normal_from_neighbours(cell, view_);
 }
 
 double Simulation::grad2(int cell) const { return cells_->grad2(cell, view_); }
@@ -171,13 +171,15 @@ double Simulation::cell_speed(int cell) const {
 LocalSpeed Simulation::local_speed(int cell) const {
   if (!grid_) throw std::invalid_argument("local_speed: grid axes exist on geometry 'plane' only; use cell_speed");
   SpreadLaw law = law_;
-  law.drive = params_.climb * Eigen::Vector3d::UnitZ() + params_.wind_spread * wind_;
+  law.drive = drive();
   return grid_->local_speed(cell, law, view_);
 }
 
-void Simulation::refresh_law() {
-  law_.drive = params_.climb * Eigen::Vector3d::UnitZ() + params_.wind_spread * wind_;
+Eigen::Vector3d Simulation::drive() const {
+  return params_.climb * Eigen::Vector3d::UnitZ() + params_.wind_spread * wind_;
 }
+
+void Simulation::refresh_law() { law_.drive = drive(); }
 
 int Simulation::ignite(const Eigen::Vector3d& point, double t, double radius) {
   const std::vector<int> lit = cells_near(point, radius);

@@ -156,6 +156,7 @@ class Simulation {
   double flame_side(int cell) const;
   void bind_cells();
   void refresh_law();
+  Eigen::Vector3d drive() const;  // eq 1's world drive now: climb and wind
   double noise(int cell, std::uint64_t stream) const;
   std::vector<int> scan_cells_near(const Eigen::Vector3d& point, double radius, double* nearest_distance, int* nearest) const;
 

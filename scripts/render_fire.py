@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import argparse
 import math
-import os
 import shutil
 import tempfile
 from pathlib import Path
@@ -76,14 +75,26 @@ def camera_and_world(size: float, width: int, samples: int):
     cam.data.lens = 32
     scene.collection.objects.link(cam)
     scene.camera = cam
+    dark_world_and_fill(scene, energy=0.4, size=size, location=(0.6 * size, -0.6 * size, 1.5 * size))
+    cycles_png(scene, width, samples)
+
+
+def dark_world_and_fill(scene, energy: float, size: float, location):
+    """A near-black world (the flames are the light) and one area fill lamp; returns the lamp."""
+    import bpy
     world = bpy.data.worlds.new("World")
     scene.world = world
     world.node_tree.nodes["Background"].inputs["Color"].default_value = (0.004, 0.004, 0.006, 1.0)
     lamp = bpy.data.objects.new("Fill", bpy.data.lights.new("Fill", "AREA"))
-    lamp.data.energy = 0.4
+    lamp.data.energy = energy
     lamp.data.size = size
-    lamp.location = (0.6 * size, -0.6 * size, 1.5 * size)
+    lamp.location = location
     scene.collection.objects.link(lamp)
+    return lamp
+
+
+def cycles_png(scene, width: int, samples: int) -> None:
+    """Cycles on the CPU at `samples`, width x 3/4 width PNGs."""
     r = scene.render
     r.engine = "CYCLES"
     r.resolution_x, r.resolution_y, r.resolution_percentage = width, width * 3 // 4, 100

@@ -23,7 +23,8 @@ from pathlib import Path
 
 import numpy as np
 
-from bench_blender import ROOT, enable_addon  # scripts/ is on the path when a script runs
+from bench_blender import ADDON_NAME, ROOT, enable_addon  # scripts/ is on the path when a script runs
+from render_fire import cycles_png, dark_world_and_fill
 
 sys.path.insert(0, str(ROOT / "tests" / "blender"))
 import blender_helpers as H  # noqa: E402  (the scene builders the tests use)
@@ -95,22 +96,9 @@ def camera_and_world(cam, width: int, samples: int):
     ob.data.lens = 35
     scene.collection.objects.link(ob)
     scene.camera = ob
-    world = bpy.data.worlds.new("World")
-    scene.world = world
-    world.node_tree.nodes["Background"].inputs["Color"].default_value = (0.004, 0.004, 0.006, 1.0)
-    lamp = bpy.data.objects.new("Fill", bpy.data.lights.new("Fill", "AREA"))
-    lamp.data.energy = 3.0
-    lamp.data.size = 0.5
-    lamp.location = (0.3, -0.6, 0.9)
+    lamp = dark_world_and_fill(scene, energy=3.0, size=0.5, location=(0.3, -0.6, 0.9))
     lamp.rotation_euler = (mathutils.Vector((0, 0, 0.1)) - lamp.location).to_track_quat("-Z", "Y").to_euler()
-    scene.collection.objects.link(lamp)
-    r = scene.render
-    r.engine = "CYCLES"
-    r.resolution_x, r.resolution_y, r.resolution_percentage = width, width * 3 // 4, 100
-    r.image_settings.file_format = "PNG"
-    scene.cycles.device = "CPU"
-    scene.cycles.samples = samples
-    scene.cycles.volume_biased = True
+    cycles_png(scene, width, samples)
     scene.view_settings.view_transform = "Standard"
 
 
@@ -121,7 +109,7 @@ def measure(sheet, probes, rest, cache_path: Path, fps: float) -> dict:
     for name, p in probes.items():
         k = int(np.argmin(np.linalg.norm(rest - np.asarray(p), axis=1)))
         out[f"ignite_{name}"] = float(ignite[k]) if ignite[k] < 1e8 else None
-    _, frames = read_pc2(cache_path)
+    _, frames = sys.modules[ADDON_NAME].cache.read_pc2(cache_path)  # the add-on's own reader
     mw = np.array(sheet.matrix_world, dtype=np.float64)
     world = frames @ mw[:3, :3].T + mw[:3, 3]
     strain = H.edge_strain(rest, world, H.mesh_edges(sheet))
@@ -129,14 +117,6 @@ def measure(sheet, probes, rest, cache_path: Path, fps: float) -> dict:
     out["max_edge_strain_frame"] = int(np.argmax(strain)) + 1
     out["max_displacement_m"] = float(np.linalg.norm(world - rest, axis=2).max())
     return out
-
-
-def read_pc2(path: Path):
-    raw = path.read_bytes()
-    n = int(np.frombuffer(raw[16:20], dtype="<i4")[0])
-    k = int(np.frombuffer(raw[28:32], dtype="<i4")[0])
-    data = np.frombuffer(raw[32:], dtype="<f4").reshape(k, n, 3).astype(np.float64)
-    return n, data
 
 
 def main(argv=None) -> int:
