@@ -159,6 +159,9 @@ LatticeDynamics::LatticeDynamics(FfdLattice& lattice, const DynamicsParams& p, L
   build_springs();
   vel_ = RowMatX3::Zero(n_, 3);
   accel_ = RowMatX3::Zero(n_, 3);
+  hist_x_ = RowMatX3::Zero(n_, 3);
+  hist_v_ = RowMatX3::Zero(n_, 3);
+  hist_stamp_.assign(n_, -1);
   drift_ = RowMatX3::Zero(n_, 3);
   disp_ = RowMatX3::Zero(n_, 3);
   x_save_ = RowMatX3::Zero(n_, 3);
@@ -350,13 +353,15 @@ void LatticeDynamics::set_params(const DynamicsParams& p) {
       o.friction != p.friction || o.integrator != p.integrator || o.sleeping != p.sleeping ||
       o.sleep_speed != p.sleep_speed || o.bimetal != p.bimetal ||
       (p.bimetal && o.crumple_gain != p.crumple_gain);
+  if (o.integrator != p.integrator) forget_history();
   if (p.bimetal && (!o.bimetal || o.crumple_gain != p.crumple_gain || o.anisotropic_curl != p.anisotropic_curl)) bimetal_all_ = true;
   p_ = p;
   if (moved) std::fill(awake_.begin(), awake_.end(), 1);
 }
 
 LatticeDynamics::Checkpoint LatticeDynamics::checkpoint() const {
-  return Checkpoint{mass_, strength_, spring_scale_, awake_, hold_, hold_len_, vel_, accel_, wind_, grad_dir_, grad_share_};
+  return Checkpoint{mass_, strength_, spring_scale_, awake_, hold_, hold_len_, vel_, accel_, wind_, grad_dir_, grad_share_,
+                    hist_x_, hist_v_, hist_stamp_, substep_count_, hist_h_};
 }
 
 void LatticeDynamics::rollback(Checkpoint&& c) {
@@ -371,6 +376,11 @@ void LatticeDynamics::rollback(Checkpoint&& c) {
   grad_dir_ = std::move(c.grad_dir);
   grad_share_ = std::move(c.grad_share);
   wind_ = c.wind;
+  hist_x_ = std::move(c.hist_x);
+  hist_v_ = std::move(c.hist_v);
+  hist_stamp_ = std::move(c.hist_stamp);
+  substep_count_ = c.substep_count;
+  hist_h_ = c.hist_h;
 }
 
 void LatticeDynamics::set_masses(const Eigen::VectorXd& m) {
@@ -402,6 +412,7 @@ void LatticeDynamics::set_pinned(const std::vector<std::uint8_t>& pinned) {
     pinned_[v] = pinned[v] ? 1 : 0;
     if (pinned_[v]) vel_.row(v).setZero();
   }
+  forget_history();
   std::fill(awake_.begin(), awake_.end(), 1);
 }
 
@@ -426,6 +437,7 @@ void LatticeDynamics::set_state(const RowMatX3& x, const RowMatX3& v) {
   lat_.positions() = x;
   vel_ = v;
   accel_.setZero();
+  forget_history();
   for (int q = 0; q < n_; ++q)
     if (pinned_[q]) vel_.row(q).setZero();
   std::fill(awake_.begin(), awake_.end(), 1);
@@ -674,19 +686,20 @@ int LatticeDynamics::integrate(double dt, int substeps, StepStats& st) {
   // strain is the motion's own (a soft silk), not the step's.
   constexpr double kStretchRedo = 0.25, kGrowth = 1.5, kConverged = 0.8;
   constexpr int kMaxRedos = 6;
-  const double before = p_.integrator == Integrator::Implicit ? max_active_strain() : 0.0;
+  const bool implicit = is_implicit(p_.integrator);
+  const double before = implicit ? max_active_strain() : 0.0;
   double last = std::numeric_limits<double>::infinity();
   for (;;) {
     const double h = substeps > 0 ? dt / substeps : 0.0;
     for (int k = 0; k < substeps; ++k) {
-      if (p_.integrator == Integrator::Implicit)
+      if (implicit)
         st.cg_iterations += implicit_substep(h);
       else
         explicit_substep(h, p_.integrator == Integrator::Explicit);
       apply_floor(h);
     }
     st.max_strain = max_active_strain();
-    if (p_.integrator != Integrator::Implicit || p_.substeps > 0 || substeps == 0 ||
+    if (!implicit || p_.substeps > 0 || substeps == 0 ||
         substeps >= p_.max_substeps || st.max_strain <= std::max(kStretchRedo, kGrowth * before) ||
         st.max_strain > kConverged * last || st.stretch_redos >= kMaxRedos)
       return substeps;
@@ -695,6 +708,7 @@ int LatticeDynamics::integrate(double dt, int substeps, StepStats& st) {
       lat_.positions().row(active_[a]) = x_save_.row(a);
       vel_.row(active_[a]) = v_save_.row(a);
     }
+    forget_history();  // the history was the failed try's: the redo starts with backward Euler
     ++st.stretch_redos;
     const double grow = std::ceil(st.max_strain / kStretchRedo);
     substeps = static_cast<int>(std::min<double>(p_.max_substeps, substeps * std::max(2.0, grow)));
@@ -703,7 +717,7 @@ int LatticeDynamics::integrate(double dt, int substeps, StepStats& st) {
 
 int LatticeDynamics::choose_substeps(double dt, double omega, double c_eff) const {
   if (p_.substeps > 0) return p_.substeps;
-  if (p_.integrator != Integrator::Implicit) {
+  if (!is_implicit(p_.integrator)) {
     const double h = p_.safety * explicit_stability_limit(p_.integrator, omega, c_eff);
     const double need = std::ceil(dt / h);
     if (!(need <= p_.max_substeps))
@@ -1082,11 +1096,41 @@ int LatticeDynamics::implicit_solve(double h) {
   return iterations;
 }
 
-int LatticeDynamics::implicit_substep(double h) {
-  implicit_assemble(h);
-  Buffers B = buffers(work_, sa_.size(), n_);
+double LatticeDynamics::bdf2_ratio(double h) const {
+  // BDF2 needs every active vertex's state one substep back; a vertex that just woke (or a
+  // redone step) has none, and the substep is backward Euler (ratio 0) for all.
+  if (p_.integrator != Integrator::Bdf2 || !(hist_h_ > 0.0)) return 0.0;
+  for (int v : active_)
+    if (hist_stamp_[v] != substep_count_) return 0.0;
+  return h / hist_h_;
+}
+
+int LatticeDynamics::implicit_substep(double h_step) {
   RowMatX3& x = lat_.positions();
   const int na = static_cast<int>(active_.size());
+  // Variable-step BDF2 (Choi and Ko 2002 use it for cloth) is backward Euler from an
+  // extrapolated state: with r = h / h_prev, x_new = x^ + h^ v_new, v_new = v^ + h^ a(x_new, v_new),
+  // where x^ = ((1 + r)^2 x - r^2 x_prev) / (1 + 2r) (v^ alike) and h^ = h (1 + r) / (1 + 2r).
+  // r = 0 is backward Euler itself. Second order: the curl and the wind's push converge as dt^2
+  // where backward Euler's artificial damping (h w^2 / 2 on a mode of frequency w) lags them as dt.
+  const double r = bdf2_ratio(h_step);
+  const double h = h_step * (1.0 + r) / (1.0 + 2.0 * r);
+  const double c_now = (1.0 + r) * (1.0 + r) / (1.0 + 2.0 * r), c_prev = r * r / (1.0 + 2.0 * r);
+  for (int a = 0; a < na; ++a) {
+    const int v = active_[a];
+    const Eigen::RowVector3d xv = x.row(v), vv = vel_.row(v);
+    if (r > 0.0) {
+      x.row(v) = c_now * xv - c_prev * hist_x_.row(v);
+      vel_.row(v) = c_now * vv - c_prev * hist_v_.row(v);
+    }
+    hist_x_.row(v) = xv;
+    hist_v_.row(v) = vv;
+    hist_stamp_[v] = substep_count_ + 1;
+  }
+  ++substep_count_;
+  hist_h_ = h_step;
+  implicit_assemble(h);
+  Buffers B = buffers(work_, sa_.size(), n_);
   // Warm start from the previous substep's acceleration (a smooth motion changes it little);
   // constrained DOFs start at their prescribed value.
   for (int a = 0; a < na; ++a) {
@@ -1136,7 +1180,7 @@ void LatticeDynamics::remove_crumple_translation() {
 void LatticeDynamics::apply_floor(double h) {
   if (!p_.has_floor) return;
   RowMatX3& x = lat_.positions();
-  const bool implicit = p_.integrator == Integrator::Implicit;
+  const bool implicit = is_implicit(p_.integrator);
   for (int v : active_) {
     // Coulomb friction: the tangential speed drops by friction times the normal speed the
     // floor removed (from the contact filter, or from the projection below).
@@ -1278,6 +1322,7 @@ StepStats LatticeDynamics::step(double dt, const Eigen::VectorXd& D, const Eigen
         lat_.positions().row(active_[a]) = x_save_.row(a);
         vel_.row(active_[a]) = v_save_.row(a);
       }
+      forget_history();
     }
   } catch (...) {
     heat_ = heat_save_;

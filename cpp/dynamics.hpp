@@ -19,8 +19,12 @@ namespace thinburn {
 enum class Integrator {
   Explicit,    ///< the paper's eqs 13-15: V = V0 + a dt, Pos = Pos0 + V dt + a dt^2 / 2
   Symplectic,  ///< symplectic Euler: V = V0 + a dt, Pos = Pos0 + V dt
-  Implicit     ///< backward Euler, one Newton step per substep, a linear solve each
+  Implicit,    ///< backward Euler (first order), one Newton step per substep, a linear solve each
+  Bdf2         ///< BDF2 (second order), one Newton step per substep, a linear solve each
 };
+
+/// @brief True for the integrators that solve a linear system per substep.
+inline bool is_implicit(Integrator i) { return i == Integrator::Implicit || i == Integrator::Bdf2; }
 
 /// @brief Preconditioner of the implicit integrator's conjugate gradients.
 enum class Preconditioner {
@@ -148,6 +152,10 @@ class LatticeDynamics {
     Eigen::Vector3d wind;
     RowMatX3 grad_dir;
     Eigen::VectorXd grad_share;
+    RowMatX3 hist_x, hist_v;
+    std::vector<std::int64_t> hist_stamp;
+    std::int64_t substep_count;
+    double hist_h;
   };
   Checkpoint checkpoint() const;
   void rollback(Checkpoint&& c);
@@ -241,6 +249,14 @@ class LatticeDynamics {
   Eigen::VectorXd contact_;         // per vertex: floor impulse per mass of this substep, -1 if free
   RowMatX3 vel_, drift_, disp_;
   RowMatX3 accel_;                  // last implicit acceleration per vertex: the CG warm start
+  // BDF2's history: each vertex's state at the start of the substep it last took part in, that
+  // substep's number and length. A vertex has history when that substep was the last one.
+  RowMatX3 hist_x_, hist_v_;
+  std::vector<std::int64_t> hist_stamp_;
+  std::int64_t substep_count_ = 0;
+  double hist_h_ = 0.0;
+  void forget_history() { substep_count_ += 2; }  // no vertex's stamp matches any more
+  double bdf2_ratio(double h) const;
   Eigen::VectorXd mass_, area_, heat_, heat_prev_, D_prev_, delta_;
   Eigen::Vector3d wind_{0, 0, 0};
   std::vector<std::uint8_t> pinned_, awake_, forced_;

@@ -12,7 +12,7 @@ from .materials import Material, resolve_material
 
 FRONT_METHODS = ("cellular", "cellular16", "fmm1", "fmm")
 
-INTEGRATORS = ("implicit", "symplectic", "explicit")
+INTEGRATORS = ("implicit", "bdf2", "symplectic", "explicit")
 # Where the cells and the lattice live (docs/surface_front.md, "Which cells"): "plane", the
 # paper's N x N grid over the rest plane (or the UV map) and an M x M lattice; "surface", cells
 # on the surface itself and a lattice on a control surface fitted to it; "auto", the plane for
@@ -97,8 +97,9 @@ class Simulation:
         0 and 1 is ambiguous (mask or indices?) and raises ValueError: pass ``mask.astype(bool)``
         or ``np.flatnonzero(mask)``.
     floor : None or the height (m) of a horizontal floor with friction under the sheet.
-    integrator : "implicit" (backward Euler, the default), "symplectic" or "explicit" (the
-        paper's eqs 13-15); explicit ones substep as stability needs or raise.
+    integrator : "implicit" (backward Euler, first order, the default), "bdf2" (second order,
+        docs/dynamics.md §4), "symplectic" or "explicit" (the paper's eqs 13-15); explicit ones
+        substep as stability needs or raise.
     shell : False switches the paper's §4 off: no lattice, particles or motion; the sheet keeps
         its rest shape and only the fire runs.
     **params : overrides of the model's scalars. A wrong type (text, a float where an int is
