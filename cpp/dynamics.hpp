@@ -247,6 +247,14 @@ class LatticeDynamics {
   std::vector<int> inc_start_, inc_spring_, inc_other_;
   std::vector<int> vert_spring_;    // per couple: its top-bottom spring
   Eigen::VectorXd contact_;         // per vertex: floor impulse per mass of this substep, -1 if free
+  std::vector<std::uint8_t> stick_; // per vertex: a contact held by static friction this substep
+  // The implicit solve's filter (Baraff and Witkin's S): a contact's v_z, and a sticking
+  // contact's whole velocity, are prescribed; filter() zeroes those components of a 3-vector.
+  bool filtered(int v, int i) const { return contact_(v) >= 0.0 && (i == 2 || stick_[v]); }
+  void filter(int v, double* x3) const {
+    for (int i = 0; i < 3; ++i)
+      if (filtered(v, i)) x3[i] = 0.0;
+  }
   RowMatX3 vel_, drift_, disp_;
   RowMatX3 accel_;                  // last implicit acceleration per vertex: the CG warm start
   // BDF2's history: each vertex's state at the start of the substep it last took part in, that
