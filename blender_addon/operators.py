@@ -37,7 +37,8 @@ def _draw_status(self, context):
         batch = getattr(job, "batch", None)
         which = f"'{job.obj_name}' ({batch[0]} of {batch[1]}) " if batch and batch[1] > 1 else ""
         self.layout.progress(factor=job.progress, type="BAR",
-                             text=f"ThinBurn {which}frame {job.current_frame} / {job.frames[-1]}  (Esc cancels)")
+                             text=f"ThinBurn {which}frame {job.current_frame} / {job.frames[-1]}, "
+                                  f"ETA {job.eta_text()}  (Esc cancels)")
 
 
 def bake_now(context, obj, stream=None, interval: float = 1.0, on_frame=None) -> BakeJob:
@@ -151,9 +152,7 @@ class BakeSheets:
             self._end(context)
             raise
         context.window_manager.progress_update(int(1000 * job.progress))
-        context.workspace.status_text_set(
-            f"ThinBurn: baking '{job.obj_name}' frame {job.current_frame} of "
-            f"{job.frames[0]}–{job.frames[-1]}  (Esc to cancel)")
+        context.workspace.status_text_set(job.status_text())
         for area in context.screen.areas:
             if area.type in {"PROPERTIES", "STATUSBAR"}:
                 area.tag_redraw()
