@@ -219,3 +219,82 @@ def test_the_status_bar_shows_percentage_and_eta(addon, tmp_path):
     assert all(re.search(r"frame \d+ of 1–8 \(\d+ %, ETA (\d+ s|\d+ min \d+ s|\?)\)", s)
                for s in lines), lines
     assert any("ETA ?" not in s for s in lines)
+
+
+# --- caches you can trust: Save As copies, a moved project still plays ---------------------------
+def _files(folder):
+    return sorted(p.relative_to(folder).as_posix() for p in folder.rglob("*") if p.is_file())
+
+
+def _baked_saved(addon, path, frames=6):
+    bpy.ops.wm.save_as_mainfile(filepath=str(path))
+    sheet = make_sheet()
+    # The default folder, //thinburn_cache/; no floor, so it falls and the cache moves it.
+    setup_bake(sheet, frames=frames, cells=16, floor=False)
+    make_igniter(sheet, (0.0, 0.0, 0.5), lit_from=1, radius=0.05)
+    addon.operators.bake_now(bpy.context, sheet)
+    bpy.ops.wm.save_mainfile()
+    return sheet
+
+
+def _plays(addon, sheet, pc2, frame=6):
+    """The sheet shows the cache file's frame (which has fallen away from the rest shape)."""
+    _, data = addon.cache.read_pc2(pc2)
+    rest = np.array([v.co for v in sheet.data.vertices])
+    assert np.abs(data[frame - 1] - rest).max() > 0.01
+    np.testing.assert_allclose(evaluated_positions(sheet, frame), data[frame - 1], atol=1e-6)
+
+
+def test_save_as_copies_the_cache_for_the_new_file(addon, tmp_path):
+    a = tmp_path / "a.blend"
+    _baked_saved(addon, a)
+    cache = tmp_path / "thinburn_cache"
+    made = _files(cache)
+    bpy.ops.wm.save_as_mainfile(filepath=str(tmp_path / "b.blend"))
+    sheet = bpy.data.objects["Sheet"]
+    assert _files(cache) == sorted(made + [f.replace("a/", "b/", 1) for f in made])
+    assert sheet.modifiers["ThinBurn Cache"].filepath == "//thinburn_cache/b/Sheet.pc2"
+    assert bpy.data.objects["ThinBurn Fire Sheet"].modifiers["ThinBurn Cache"].filepath.startswith(
+        "//thinburn_cache/b/")
+    assert all(item.path.startswith("//thinburn_cache/b/") for item in sheet.thinburn.baked_files)
+    _plays(addon, sheet, cache / "b" / "Sheet.pc2")
+    # Free in b.blend removes b's copy only; a.blend still plays its own.
+    bpy.context.view_layer.objects.active = sheet
+    assert bpy.ops.thinburn.free_bake() == {"FINISHED"}
+    assert _files(cache) == made
+    bpy.ops.wm.open_mainfile(filepath=str(a))
+    _plays(addon, bpy.data.objects["Sheet"], cache / "a" / "Sheet.pc2")
+
+
+def test_save_as_into_another_folder_and_save_copy(addon, tmp_path):
+    _baked_saved(addon, tmp_path / "a.blend")
+    (tmp_path / "shots").mkdir()
+    bpy.ops.wm.save_as_mainfile(filepath=str(tmp_path / "shots" / "b.blend"))
+    sheet = bpy.data.objects["Sheet"]
+    assert sheet.modifiers["ThinBurn Cache"].filepath == "//thinburn_cache/b/Sheet.pc2"
+    copied = tmp_path / "shots" / "thinburn_cache" / "b" / "Sheet.pc2"
+    _plays(addon, sheet, copied)
+    # Save Copy: the copy gets its cache; the open file (b) keeps pointing at its own.
+    bpy.ops.wm.save_as_mainfile(filepath=str(tmp_path / "c.blend"), copy=True)
+    assert sheet.modifiers["ThinBurn Cache"].filepath == "//thinburn_cache/b/Sheet.pc2"
+    assert sheet.thinburn.baked_blend == str(tmp_path / "shots" / "b.blend")
+    bpy.ops.wm.open_mainfile(filepath=str(tmp_path / "c.blend"))
+    sheet = bpy.data.objects["Sheet"]
+    assert sheet.modifiers["ThinBurn Cache"].filepath == "//thinburn_cache/c/Sheet.pc2"
+    _plays(addon, sheet, tmp_path / "thinburn_cache" / "c" / "Sheet.pc2")
+
+
+def test_a_project_moved_with_its_cache_plays_from_the_new_place(addon, tmp_path):
+    # A render farm: the .blend and its cache folder copied together somewhere else.
+    import shutil
+    src = tmp_path / "here"
+    src.mkdir()
+    _baked_saved(addon, src / "shot.blend")
+    bpy.ops.wm.read_homefile(use_empty=True)
+    dst = tmp_path / "farm" / "job1"
+    shutil.copytree(src, dst)
+    shutil.rmtree(src)  # nothing left at the old place to fall back on
+    bpy.ops.wm.open_mainfile(filepath=str(dst / "shot.blend"))
+    sheet = bpy.data.objects["Sheet"]
+    _plays(addon, sheet, dst / "thinburn_cache" / "shot" / "Sheet.pc2")
+    assert point_attribute(sheet, "thinburn_ignite_time").min() < 1e8
