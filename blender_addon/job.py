@@ -128,7 +128,10 @@ class BakeJob:
             self.floor = kwargs.get("floor")  # where the ash flakes land, too
             _check_floor(obj, world, self.floor, settings)
             self.modifier_path, self.abs_path = inputs.cache_path(obj, settings)
-            self.writer = cache.PC2Writer(self.abs_path, len(world), start_frame=float(self.frames[0]))
+            self.cache_step = int(settings.cache_step)
+            self.writer = cache.PC2Writer(self.abs_path, len(world), start_frame=float(self.frames[0]),
+                                          sample_rate=float(self.cache_step))
+            self.thinned = cache.ThinnedSamples(self.writer, self.cache_step)
         except OSError as exc:
             self._restore_frame()
             raise BakeError(f"cannot write the cache file in '{settings.cache_dir}': "
@@ -323,7 +326,7 @@ class BakeJob:
                 _, index, positions, lit, particles = msg
                 if self.stretch is not None:
                     self.stretch.add(positions, self.frames[index])
-                self.writer.append(self._to_local(positions))
+                self.thinned.add(index, self._to_local(positions))
                 self.lit += lit
                 if particles is not None:  # to the world: the fire objects do not move
                     pts, temps = particles
@@ -355,11 +358,18 @@ class BakeJob:
         obj = bpy.data.objects.get(self.obj_name)
         if obj is None:
             self._fail(f"the sheet '{self.obj_name}' was deleted during the bake")
+        self.thinned.finish(len(self.frames) - 1)
         self.writer.commit()
         start = float(self.frames[0])
         ignite = cache.seconds_to_frames(ignite_s, start, self.fps)
         burnout = cache.seconds_to_frames(burnout_s, start, self.fps)
         materials.apply_bake(obj, self.modifier_path, start, ignite, burnout, self.floor)
+        # Keep Every k: sample j of the file is frame Start + j k. The Mesh Cache modifier reads
+        # sample (Frame Scale × frame − Frame Start) and blends between samples (its source,
+        # MOD_meshcache.cc), so Frame Scale = 1/k and Frame Start = Start/k.
+        md = obj.modifiers[materials.CACHE_MODIFIER]
+        md.frame_scale = 1.0 / self.cache_step
+        md.frame_start = start / self.cache_step
         if self.want_particles:
             fire.apply_particles(obj, self.modifier_path, self.particle_frames, start)
         obj.thinburn.baked_file = self.modifier_path

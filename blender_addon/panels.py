@@ -126,6 +126,7 @@ class PHYSICS_PT_thinburn_cache(ThinBurnPhysicsPanel, bpy.types.Panel):
         col.prop(settings, "frame_start")
         col.prop(settings, "frame_end")
         layout.prop(settings, "cache_dir")
+        layout.prop(settings, "cache_step")
         running = running_job(context.scene)
         if running is not None:
             layout.progress(factor=running.progress, type="BAR",

@@ -298,3 +298,26 @@ def test_a_project_moved_with_its_cache_plays_from_the_new_place(addon, tmp_path
     sheet = bpy.data.objects["Sheet"]
     _plays(addon, sheet, dst / "thinburn_cache" / "shot" / "Sheet.pc2")
     assert point_attribute(sheet, "thinburn_ignite_time").min() < 1e8
+
+
+# --- the compact cache: every k-th frame, blended by the Mesh Cache modifier -------------------
+@pytest.mark.parametrize("start", [1, 7])
+def test_keep_every_k_frames_plays_the_kept_frames_exactly_and_blends_between(addon, tmp_path, start):
+    sheet = make_sheet()
+    setup_bake(sheet, frames=12, cells=16, cache_dir=tmp_path / "full", floor=False)
+    sheet.thinburn.frame_start, sheet.thinburn.frame_end = start, start + 11
+    make_igniter(sheet, (0.0, 0.0, 0.5), lit_from=start, radius=0.05)
+    addon.operators.bake_now(bpy.context, sheet)
+    full = [evaluated_positions(sheet, start + i) for i in range(12)]
+    sheet.thinburn.cache_dir = str(tmp_path / "compact")
+    sheet.thinburn.cache_step = 4
+    addon.operators.bake_now(bpy.context, sheet)
+    head, data = addon.cache.read_pc2(tmp_path / "compact" / "untitled" / "Sheet.pc2")
+    # Frames 0, 4, 8 and one closing sample for frame 11 (0-based): 4 of 12 frames' bytes.
+    assert head["samples"] == 4 and head["sample_rate"] == 4.0
+    compact = [evaluated_positions(sheet, start + i) for i in range(12)]
+    for i in (0, 4, 8, 11):  # the kept frames and the last one: exact (float32)
+        np.testing.assert_allclose(compact[i], full[i], atol=1e-6)
+    for i in (2, 6):  # between: the blend of its two kept neighbours
+        np.testing.assert_allclose(compact[i], 0.5 * (full[i - 2] + full[i + 2]), atol=1e-5)
+    assert max(np.abs(c - f).max() for c, f in zip(compact, full)) > 0.0  # it is a blend
