@@ -74,7 +74,9 @@ def pin_mask(obj, group_name: str) -> np.ndarray:
     """(n,) bool: the vertices of the pin group with weight above 0.5."""
     group = obj.vertex_groups.get(group_name)
     if group is None:
-        raise BakeError(f"pin group '{group_name}' is not a vertex group of '{obj.name}'")
+        raise BakeError(f"pin group '{group_name}' is not a vertex group of '{obj.name}': "
+                        "choose one of its vertex groups as Pin Group (Physics > ThinBurn > "
+                        "Motion), or clear it")
     mask = np.zeros(len(obj.data.vertices), dtype=bool)
     index = group.index
     for v in obj.data.vertices:
@@ -265,7 +267,8 @@ def cache_path(obj, settings) -> tuple:
     ``<Cache Folder>/<blend name>/<object name>.pc2``."""
     raw = settings.cache_dir.strip()
     if not raw:
-        raise BakeError("the cache folder is empty: choose a folder for the bake")
+        raise BakeError("the Cache Folder is empty: choose a folder for the bake "
+                        "(Physics > ThinBurn > Cache; '//thinburn_cache/' keeps it beside the .blend)")
     if raw.startswith("//") and not bpy.data.filepath:
         raise BakeError(f"the cache folder '{raw}' is relative to the .blend file, which is not "
                         "saved yet: save the file or choose an absolute folder")
@@ -275,8 +278,10 @@ def cache_path(obj, settings) -> tuple:
     try:
         os.makedirs(folder, exist_ok=True)
     except OSError as exc:
-        raise BakeError(f"cannot create the cache folder '{folder}': {exc.strerror or exc}") from None
+        raise BakeError(f"cannot create the cache folder '{folder}': {exc.strerror or exc}. "
+                        "Choose another Cache Folder (Physics > ThinBurn > Cache)") from None
     if not os.access(folder, os.W_OK):
-        raise BakeError(f"the cache folder '{folder}' is not writable")
+        raise BakeError(f"the cache folder '{folder}' is not writable: choose another Cache "
+                        "Folder (Physics > ThinBurn > Cache)")
     shown = raw if raw.endswith(("/", "\\")) else raw + "/"
     return f"{shown}{stem}/{name}", os.path.join(folder, name)

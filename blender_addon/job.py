@@ -94,6 +94,9 @@ def explain_core_error(text: str, lattice: int) -> str:
         now = "0: the core's choice" if lattice == 0 else str(lattice)
         out += (f". The lattice is Motion Detail (Physics > ThinBurn, now {now}): set it "
                 f"{'higher' if lattice else 'yourself'}, e.g. 9 or more, or change Fire Detail")
+    elif "wind" in text:
+        out += (". The wind is each Wind or Turbulence field's Strength (and Noise) × Wind Scale "
+                "(Physics > ThinBurn): lower them")
     elif "cells" in text:
         out += ". The cells are Fire Detail (Physics > ThinBurn)"
     return out
@@ -393,5 +396,5 @@ class BakeJob:
             text = stretch.stretch_warning(self.obj_name, worst, at, self.lattice)
             if text:
                 self.warnings.append(text)
-        if self.shell and self.tilt > TILT_WARNING_DEG:
+        if self.tilt > TILT_WARNING_DEG:
             self.warnings.append(inputs.tilt_warning(self.obj_name, self.tilt))

@@ -48,7 +48,8 @@ def bake_now(context, obj, stream=None, interval: float = 1.0, on_frame=None) ->
     a failed or interrupted bake leaves the previous one as it was."""
     scene = context.scene
     if running_job(scene) is not None:
-        raise BakeError("another ThinBurn bake is running in this scene")
+        raise BakeError("another ThinBurn bake is running in this scene: wait for it to finish, "
+                        "or press Esc to cancel it")
     job = BakeJob(context, obj)
     lines = ProgressLines(job.obj_name, stream, interval) if stream is not None else None
 

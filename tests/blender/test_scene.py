@@ -321,3 +321,14 @@ def test_keep_every_k_frames_plays_the_kept_frames_exactly_and_blends_between(ad
     for i in (2, 6):  # between: the blend of its two kept neighbours
         np.testing.assert_allclose(compact[i], 0.5 * (full[i - 2] + full[i + 2]), atol=1e-5)
     assert max(np.abs(c - f).max() for c, f in zip(compact, full)) > 0.0  # it is a blend
+
+
+def test_a_wind_too_strong_for_the_core_names_the_settings_to_lower(addon, tmp_path):
+    sheet = _free_sheet(tmp_path, frames=3)
+    _field(strength=5000.0)  # × Wind Scale 1: 5 km/s, past the core's 1000 m/s
+    with pytest.raises(addon.inputs.BakeError, match="exceeds 1000 m/s") as err:
+        addon.operators.bake_now(bpy.context, sheet)
+    assert "Strength (and Noise) × Wind Scale (Physics > ThinBurn): lower them" in str(err.value)
+    sheet.thinburn.pin_group = "Nope"
+    with pytest.raises(addon.inputs.BakeError, match="choose one of its vertex groups as Pin Group"):
+        addon.operators.bake_now(bpy.context, sheet)
