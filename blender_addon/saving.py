@@ -80,6 +80,7 @@ def _copy_bake(obj, settings, old_blend: str, new_blend: str, changes: list) -> 
 @bpy.app.handlers.persistent
 def copy_caches_on_save_as(filepath, *_):
     """save_pre: a save to another .blend copies every baked sheet's files for it."""
+    _pending.clear()  # a save that failed after its save_pre never reached save_post
     old = bpy.data.filepath
     if not old or not filepath or os.path.realpath(old) == os.path.realpath(filepath):
         return
