@@ -37,7 +37,8 @@ def _draw_status(self, context):
         batch = getattr(job, "batch", None)
         which = f"'{job.obj_name}' ({batch[0]} of {batch[1]}) " if batch and batch[1] > 1 else ""
         self.layout.progress(factor=job.progress, type="BAR",
-                             text=f"ThinBurn {which}frame {job.current_frame} / {job.frames[-1]}  (Esc cancels)")
+                             text=f"ThinBurn {which}frame {job.current_frame} / {job.frames[-1]}, "
+                                  f"ETA {job.eta_text()}  (Esc cancels)")
 
 
 def bake_now(context, obj, stream=None, interval: float = 1.0, on_frame=None) -> BakeJob:
@@ -47,7 +48,8 @@ def bake_now(context, obj, stream=None, interval: float = 1.0, on_frame=None) ->
     a failed or interrupted bake leaves the previous one as it was."""
     scene = context.scene
     if running_job(scene) is not None:
-        raise BakeError("another ThinBurn bake is running in this scene")
+        raise BakeError("another ThinBurn bake is running in this scene: wait for it to finish, "
+                        "or press Esc to cancel it")
     job = BakeJob(context, obj)
     lines = ProgressLines(job.obj_name, stream, interval) if stream is not None else None
 
@@ -151,9 +153,7 @@ class BakeSheets:
             self._end(context)
             raise
         context.window_manager.progress_update(int(1000 * job.progress))
-        context.workspace.status_text_set(
-            f"ThinBurn: baking '{job.obj_name}' frame {job.current_frame} of "
-            f"{job.frames[0]}–{job.frames[-1]}  (Esc to cancel)")
+        context.workspace.status_text_set(job.status_text())
         for area in context.screen.areas:
             if area.type in {"PROPERTIES", "STATUSBAR"}:
                 area.tag_redraw()

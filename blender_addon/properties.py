@@ -199,6 +199,12 @@ class ThinBurnSettings(bpy.types.PropertyGroup):
     cache_dir: StringProperty(
         name="Cache Folder", default="//thinburn_cache/", subtype="DIR_PATH", options=RELATIVE_PATH,
         description="Folder of the bake's PC2 file; '//' means next to the .blend file")
+    cache_step: IntProperty(
+        name="Keep Every", default=1, min=1, soft_max=8, max=48, options=STATIC,
+        description="Store the sheet's shape only every this many frames (1: every frame). "
+                    "The Mesh Cache modifier blends linearly between the stored frames, so a "
+                    "big mesh's cache shrinks this many times, at a small error in its motion "
+                    "(docs/blender.md measures it). The fire's own files keep every frame")
 
     flame_height: FloatProperty(
         name="Flame Height", default=0.06, min=0.0, soft_max=0.5, subtype="DISTANCE", unit="LENGTH",

@@ -432,6 +432,14 @@ void LatticeDynamics::set_wind(const Eigen::Vector3d& w) {
     if (area_(v) > 0.0) awake_[v] = 1;
 }
 
+void LatticeDynamics::set_wind_field(const RowMatX3& w) {
+  require(w.rows() == 0 || w.rows() == n_, "wind field: one wind per control vertex expected");
+  require(w.allFinite(), "wind field must be finite");
+  wind_field_ = w;
+  for (int v = 0; v < n_; ++v)
+    if (area_(v) > 0.0) awake_[v] = 1;
+}
+
 void LatticeDynamics::set_state(const RowMatX3& x, const RowMatX3& v) {
   require(x.rows() == n_ && x.allFinite(), "positions must be finite, 2*M*M x 3");
   require(v.rows() == n_ && v.allFinite(), "velocities must be finite, 2*M*M x 3");
@@ -463,7 +471,8 @@ Eigen::Vector3d LatticeDynamics::vertex_force(int v, const RowMatX3& x, const Ro
   }
   if (p_.wind_drag > 0.0 && area_(v) > 0.0) {
     const Eigen::Vector3d n = couple_normal(v, x);
-    f += p_.wind_drag * area_(v) * (wind_ - vel.row(v).transpose()).dot(n) * n;
+    const Eigen::Vector3d wind = wind_field_.rows() ? Eigen::Vector3d(wind_field_.row(v).transpose()) : wind_;
+    f += p_.wind_drag * area_(v) * (wind - vel.row(v).transpose()).dot(n) * n;
   }
   return f;
 }

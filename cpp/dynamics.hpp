@@ -132,6 +132,9 @@ class LatticeDynamics {
   void set_floor_offsets(const Eigen::VectorXd& offsets);
   /// @brief Wind velocity, m/s.
   void set_wind(const Eigen::Vector3d& w);
+  /// @brief Wind velocity per control vertex ((2 M^2) x 3, m/s), used instead of set_wind's
+  /// uniform wind on the lattice; 0 rows: back to the uniform wind.
+  void set_wind_field(const RowMatX3& w);
   /// @brief Set positions and velocities ((2 M^2) x 3 each); everything wakes.
   void set_state(const RowMatX3& x, const RowMatX3& v);
 
@@ -267,6 +270,7 @@ class LatticeDynamics {
   double bdf2_ratio(double h) const;
   Eigen::VectorXd mass_, area_, heat_, heat_prev_, D_prev_, delta_;
   Eigen::Vector3d wind_{0, 0, 0};
+  RowMatX3 wind_field_;             // per vertex (set_wind_field), 0 rows: wind_ everywhere
   std::vector<std::uint8_t> pinned_, awake_, forced_;
   std::vector<std::uint16_t> hold_;  // steps a flickering sleeper still stays awake
   std::vector<std::uint16_t> hold_len_;  // the length of its last hold (doubles per flicker)

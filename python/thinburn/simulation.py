@@ -299,6 +299,28 @@ class Simulation:
                              "(the model's drag and particles overflow far above it)")
         self._sim.wind = w
 
+    def set_wind_field(self, wind) -> None:
+        """Wind per lattice control vertex for the sheet's motion, m/s: an array shaped as
+        ``lattice_positions()`` ((M, M, 2, 3); (couples, 2, 3) on a surface), used instead of
+        ``wind`` by the lattice's wind drag until set again; None: the uniform ``wind`` again.
+        The fire front and the fire particles keep the uniform ``wind``."""
+        self._require_shell("set_wind_field")
+        n = 2 * self._sim.lattice_couples
+        if wind is None:
+            self._sim.set_wind_field(np.zeros((0, 3)))
+            return
+        w = np.asarray(wind, dtype=np.float64)
+        if w.size != 3 * n or w.shape[-1] != 3:
+            raise ValueError(f"wind field: expected one (x, y, z) per control vertex, shaped like "
+                             f"lattice_positions() ({n} vectors), got shape {w.shape}")
+        w = w.reshape(n, 3)
+        if not np.all(np.isfinite(w)):
+            raise ValueError("wind field: every value must be finite")
+        fastest = float(np.linalg.norm(w, axis=1).max()) if n else 0.0
+        if fastest > MAX_WIND:
+            raise ValueError(f"wind field: |wind| = {fastest:.3g} m/s exceeds {MAX_WIND:g} m/s")
+        self._sim.set_wind_field(np.ascontiguousarray(w))
+
     @property
     def threads(self) -> int:
         """This Simulation's thread count (None sets all logical cores); results never depend
