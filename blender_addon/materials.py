@@ -17,7 +17,7 @@ import numpy as np
 
 import bpy
 
-from . import cache
+from . import cache, mantaflow
 from .fire import apply_flakes, ember_object_name, fire_object_name, flake_object_name, light_object_name
 from .nodes import (ensure_modifier, interface_socket, link, map_range, new_group, node, set_input,
                     socket, use_nodes)
@@ -526,6 +526,7 @@ def free_bake(obj) -> list:
         _remove_object(fire)
         if "fire particles" not in gone:
             gone.append("fire particles")
+    gone += mantaflow.free(obj, delete_files=not recorded or owns_cache(settings))
     _delete_files(paths, gone)
     settings.baked_file = ""
     settings.baked_shape = ""
