@@ -687,7 +687,7 @@ FLAKE_LIFT = (0.6, 1.0)  # m/s: the fire's updraft under a flake as it breaks of
 FLAKE_LIFT_TIME = 0.5  # s: ... which fades as the flake leaves the flames
 FLAKE_SCATTER = (0.05, 0.25)  # m/s: ... and carries it sideways, out of the burnt hole
 FLAKE_GLOW_TIME = 0.4  # s: its ember glow fades to 1/e in this time
-FLAKE_GLOW = 3.0       # emission strength of a flake as it breaks off
+FLAKE_GLOW = 1.5       # emission strength of a flake as it breaks off
 FLAKE_RAGGED = (0.6, 1.3, 0.25)  # a flake's size factor (low, high) and its corners' jitter
 FLAKE_GLOW_K = 1150.0  # K: the colour of that glow (dull orange)
 

@@ -38,6 +38,9 @@ MARGIN = 0.25          # of the sheet's largest horizontal size, on each side of
 ROOM_ABOVE = 1.0       # of the sheet's largest horizontal size, above its sweep, for the flames
 MIN_ROOM = 0.05        # m, at least this much room on every side
 SURFACE_EMISSION = 1.5  # voxels: a planar sheet emits this far from its surface
+SMOKE_DENSITY = 2.0     # the smoke's density scale
+SMOKE_FLAME_K = 1600.0  # K: the flames' blackbody colour (orange)
+SMOKE_FLAME_STRENGTH = 20.0  # volume emission per unit of Mantaflow's flame
 
 
 def domain_object_name(obj) -> str:
@@ -152,20 +155,35 @@ def _box_mesh(name, lo, hi):
 
 
 def smoke_material():
-    """"ThinBurn Smoke": Principled Volume with blackbody fire, as Quick Smoke makes it."""
+    """"ThinBurn Smoke": Principled Volume, dark smoke from Mantaflow's ``density`` and flames
+    that glow a blackbody colour from its ``flame`` grid (SMOKE_FLAME_K, strength
+    SMOKE_FLAME_STRENGTH per unit flame)."""
     mat = bpy.data.materials.get(DOMAIN_MATERIAL)
     if mat is not None:
         return mat
     mat = bpy.data.materials.new(DOMAIN_MATERIAL)
     mat.use_nodes = True
-    nodes = mat.node_tree.nodes
-    nodes.clear()
-    vol = nodes.new("ShaderNodeVolumePrincipled")
-    vol.inputs["Density"].default_value = 5.0
-    vol.inputs["Blackbody Intensity"].default_value = 1.0
-    out = nodes.new("ShaderNodeOutputMaterial")
+    tree = mat.node_tree
+    tree.nodes.clear()
+    vol = tree.nodes.new("ShaderNodeVolumePrincipled")
+    vol.inputs["Color"].default_value = (0.05, 0.05, 0.05, 1.0)
+    vol.inputs["Density"].default_value = SMOKE_DENSITY
+    flame = tree.nodes.new("ShaderNodeAttribute")
+    flame.attribute_name = "flame"
+    flame.location = (-600, -300)
+    strength = tree.nodes.new("ShaderNodeMath")
+    strength.operation = "MULTIPLY"
+    strength.inputs[1].default_value = SMOKE_FLAME_STRENGTH
+    strength.location = (-350, -300)
+    tree.links.new(flame.outputs["Fac"], strength.inputs[0])
+    tree.links.new(strength.outputs[0], vol.inputs["Emission Strength"])
+    body = tree.nodes.new("ShaderNodeBlackbody")
+    body.inputs["Temperature"].default_value = SMOKE_FLAME_K
+    body.location = (-350, -100)
+    tree.links.new(body.outputs[0], vol.inputs["Emission Color"])
+    out = tree.nodes.new("ShaderNodeOutputMaterial")
     out.location = (300, 0)
-    mat.node_tree.links.new(vol.outputs[0], out.inputs["Volume"])
+    tree.links.new(vol.outputs[0], out.inputs["Volume"])
     return mat
 
 

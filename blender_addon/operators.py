@@ -347,6 +347,7 @@ class THINBURN_OT_add_mantaflow_fire(bpy.types.Operator):
             self.report({"ERROR"}, f"ThinBurn: bake '{obj.name}' first (Physics > ThinBurn > "
                                    "Bake): the fire source follows the baked burning edge")
             return {"CANCELLED"}
+        mantaflow.prepare_solver(context.scene)  # before the domain's solver exists (bpy module)
         mantaflow.add_flow(obj)
         domain = mantaflow.add_domain(obj, context.scene, obj.thinburn.mantaflow_resolution)
         mantaflow.hide_thinburn_flames(obj, self.hide_flames)

@@ -44,6 +44,8 @@ def main(cache_dir):
     make_igniter(sheet, (-0.1, -0.1, 0.0), lit_from=1, radius=0.06)
     bpy.context.view_layer.objects.active = sheet
     assert bpy.ops.thinburn.bake() == {"FINISHED"}
+    manta = sys.modules.get("manta")  # imported with bpy in bpy-as-a-module
+    whole_before = hasattr(getattr(manta, "LevelsetGrid", None), "setConst")
     assert bpy.ops.thinburn.add_mantaflow_fire() == {"FINISHED"}
     domain = settings.mantaflow_domain
     name = domain.name
@@ -56,7 +58,9 @@ def main(cache_dir):
         "stack": [md.name for md in sheet.modifiers],
         "domain_low": corners.min(axis=0).tolist(), "domain_high": corners.max(axis=0).tolist(),
         "cache": bpy.path.abspath(ds.cache_directory), "resolution": ds.resolution_max,
-        "mended": addon.mantaflow.prepare_solver(bpy.context.scene),
+        "whole_before": whole_before,
+        "whole_after": hasattr(getattr(manta, "LevelsetGrid", None), "setConst"),
+        "mended_again": addon.mantaflow.prepare_solver(bpy.context.scene),
     }
     addon.mantaflow.bake(domain, bpy.context.scene)
     out["files"] = sorted(os.listdir(os.path.join(out["cache"], "data")))
