@@ -747,11 +747,12 @@ def flake_frames(positions, faces, burnout, dt: float, share: float, seed: int =
 
     ``positions`` (frames, n, 3) world positions of the baked sheet, ``faces`` a list of vertex
     index lists, ``burnout`` (n,) frames since the first frame (cache.NEVER_FRAME: never).
-    Faces that burn out within the bake shed flakes (_pick_flakes): a quad FLAKE_SIZE across,
-    at the face, that the fire's updraft first lifts (FLAKE_LIFT,
-    fading over FLAKE_LIFT_TIME) and carries sideways (FLAKE_SCATTER), then falls at FLAKE_FALL, swings from side to side, tumbles,
-    drifts with the wind and comes to rest flat on ``floor`` (a world height; None: it keeps
-    falling). Before it breaks off the flake is folded into a point (invisible). Returns
+    Faces that burn out within the bake shed flakes (_pick_flakes): a torn quad about
+    FLAKE_SIZE across, at the face, that the fire's updraft first lifts (FLAKE_LIFT, fading
+    over FLAKE_LIFT_TIME) and carries sideways (FLAKE_SCATTER), then falls at FLAKE_FALL,
+    swings from side to side, tumbles, drifts with the wind and comes to rest flat on
+    ``floor`` (a world height; None: it keeps falling). Before it breaks off the flake is
+    folded into a point (invisible). Returns
     ((frames, 4 * flakes, 3) corners, the number of flakes, (flakes,) the frame index each
     breaks off at). Deterministic per seed; all flakes move together (numpy), frame by frame."""
     positions = np.asarray(positions, dtype=np.float64)

@@ -22,6 +22,7 @@ import glob
 import os
 import shutil
 import sys
+import tempfile
 
 import numpy as np
 
@@ -63,15 +64,26 @@ def _broken_manta():
     return manta
 
 
+class MantaflowError(RuntimeError):
+    """Mantaflow cannot bake in this Blender; the text says what to do instead."""
+
+
 def _bpy_library():
-    """The bpy extension module's own library (``bpy/__init__.so`` or ``.pyd``)."""
+    """The library that holds ``PyInit_manta_main``: bpy's own (``bpy/__init__.so`` or
+    ``.pyd``), else the running executable when it exports it."""
     local = os.path.dirname(os.path.normpath(bpy.utils.resource_path("LOCAL")))
-    for path in sorted(glob.glob(os.path.join(local, "__init__*"))):
-        if not path.endswith(".py"):
+    paths = [p for p in sorted(glob.glob(os.path.join(local, "__init__*"))) if not p.endswith(".py")]
+    for path in paths + [None]:
+        try:
             lib = ctypes.PyDLL(path)
-            if hasattr(lib, "PyInit_manta_main"):
-                return lib
-    raise RuntimeError(f"Mantaflow: no bpy library with PyInit_manta_main in {local}")
+        except OSError:
+            continue
+        if hasattr(lib, "PyInit_manta_main"):
+            return lib
+    raise MantaflowError(
+        "Mantaflow's Python module is incomplete in this Blender ('LevelsetGrid' has no "
+        "'setConst') and ThinBurn cannot mend it here: bake the smoke domain in Blender "
+        "itself (open the .blend and use the domain's Physics > Cache > Bake Data)")
 
 
 def prepare_solver(scene) -> bool:
@@ -80,6 +92,7 @@ def prepare_solver(scene) -> bool:
     manta = _broken_manta()
     if manta is None:
         return False
+    lib = _bpy_library()
     mesh = bpy.data.meshes.new("ThinBurn Mantaflow Setup")
     mesh.from_pydata([(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1)], [],
                      [(0, 1, 2), (0, 1, 3), (0, 2, 3), (1, 2, 3)])
@@ -88,17 +101,18 @@ def prepare_solver(scene) -> bool:
     md = probe.modifiers.new(DOMAIN_MODIFIER, "FLUID")
     md.fluid_type = "DOMAIN"
     md.domain_settings.resolution_max = 6
-    md.domain_settings.cache_directory = os.path.join(bpy.app.tempdir or "/tmp", "thinburn_manta_setup")
+    md.domain_settings.cache_directory = os.path.join(tempfile.gettempdir(), "thinburn_manta_setup")
     try:
         bpy.context.evaluated_depsgraph_get().update()  # the solver's creation sets up the registry
     finally:
         bpy.data.objects.remove(probe)
         bpy.data.meshes.remove(mesh)
-    lib = _bpy_library()
     lib.PyInit_manta_main.restype = ctypes.py_object
     lib.PyInit_manta_main()  # rebuilds the classes in place, now with their base classes' methods
     if not hasattr(manta.LevelsetGrid, "setConst"):
-        raise RuntimeError("Mantaflow's classes still lack their inherited methods")
+        raise MantaflowError("Mantaflow's Python module is still incomplete after ThinBurn's "
+                             "mend: bake the smoke domain in Blender itself (the domain's "
+                             "Physics > Cache > Bake Data)")
     return True
 
 
@@ -226,7 +240,8 @@ def bake(domain, scene) -> None:
     with bpy.context.temp_override(scene=scene, object=domain, active_object=domain):
         result = bpy.ops.fluid.bake_data()
     if "FINISHED" not in result:
-        raise RuntimeError(f"Mantaflow's bake of '{domain.name}' did not finish: {result}")
+        raise MantaflowError(f"Mantaflow's bake of '{domain.name}' did not finish ({result}): "
+                             "see the console for the solver's message")
 
 
 def remove_domain(obj, delete_files: bool = True) -> list:

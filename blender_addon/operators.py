@@ -347,14 +347,24 @@ class THINBURN_OT_add_mantaflow_fire(bpy.types.Operator):
             self.report({"ERROR"}, f"ThinBurn: bake '{obj.name}' first (Physics > ThinBurn > "
                                    "Bake): the fire source follows the baked burning edge")
             return {"CANCELLED"}
-        mantaflow.prepare_solver(context.scene)  # before the domain's solver exists (bpy module)
+        try:
+            mantaflow.prepare_solver(context.scene)  # before the domain's solver exists (bpy module)
+            usable = True
+        except mantaflow.MantaflowError as exc:
+            self.report({"WARNING"}, f"ThinBurn: {exc}")
+            usable = False
         mantaflow.add_flow(obj)
         domain = mantaflow.add_domain(obj, context.scene, obj.thinburn.mantaflow_resolution)
         mantaflow.hide_thinburn_flames(obj, self.hide_flames)
-        if self.bake:
-            mantaflow.bake(domain, context.scene)
+        if self.bake and usable:
+            try:
+                mantaflow.bake(domain, context.scene)
+            except mantaflow.MantaflowError as exc:
+                self.report({"ERROR"}, f"ThinBurn: {exc}")
+                usable = False
         self.report({"INFO"}, f"ThinBurn: '{obj.name}' emits fire into '{domain.name}'"
-                              + (" (baked)" if self.bake else "; bake it in its Physics > Cache panel"))
+                              + (" (baked)" if self.bake and usable
+                                 else "; bake it in its Physics > Cache panel"))
         return {"FINISHED"}
 
 
