@@ -320,6 +320,61 @@ class THINBURN_OT_add_burn_to_material(bpy.types.Operator):
 CLASSES = CLASSES + (THINBURN_OT_add_burn_to_material,)
 
 
+class THINBURN_OT_add_mantaflow_fire(bpy.types.Operator):
+    """Make the baked sheet a Mantaflow fire source that emits from its burning edge, inside a
+    smoke domain sized to the burn (Free Bake removes both)"""
+
+    bl_idname = "thinburn.add_mantaflow_fire"
+    bl_label = "Add Mantaflow Fire"
+    bl_options = {"REGISTER", "UNDO"}
+
+    bake: bpy.props.BoolProperty(
+        name="Bake Now", default=False,
+        description="Bake the smoke domain right away (else bake it from its Physics > Cache panel)")
+    hide_flames: bpy.props.BoolProperty(
+        name="Hide ThinBurn Flames", default=True,
+        description="Hide the add-on's own flame volume, which Mantaflow's flames replace (its "
+                    "light and the embers stay)")
+
+    @classmethod
+    def poll(cls, context):
+        return _sheet(context) is not None and running_job(context.scene) is None
+
+    def execute(self, context):
+        from . import mantaflow
+        obj = _sheet(context)
+        if not obj.thinburn.baked_file:
+            self.report({"ERROR"}, f"ThinBurn: bake '{obj.name}' first (Physics > ThinBurn > "
+                                   "Bake): the fire source follows the baked burning edge")
+            return {"CANCELLED"}
+        try:
+            mantaflow.prepare_solver(context.scene)  # before the domain's solver exists (bpy module)
+            usable = True
+        except mantaflow.MantaflowError as exc:
+            self.report({"WARNING"}, f"ThinBurn: {exc}")
+            usable = False
+        mantaflow.add_flow(obj)
+        domain = mantaflow.add_domain(obj, context.scene, obj.thinburn.mantaflow_resolution)
+        mantaflow.hide_thinburn_flames(obj, self.hide_flames)
+        if self.bake and usable:
+            try:
+                mantaflow.bake(domain, context.scene)
+            except mantaflow.MantaflowError as exc:
+                self.report({"ERROR"}, f"ThinBurn: {exc}")
+                usable = False
+        self.report({"INFO"}, f"ThinBurn: '{obj.name}' emits fire into '{domain.name}'"
+                              + (" (baked)" if self.bake and usable
+                                 else "; bake it in its Physics > Cache panel"))
+        return {"FINISHED"}
+
+
+CLASSES = CLASSES + (THINBURN_OT_add_mantaflow_fire,)
+
+
+def _quick_effects_menu(self, context):
+    self.layout.operator(THINBURN_OT_add_mantaflow_fire.bl_idname, icon="FORCE_FORCE")
+
+
 @bpy.app.handlers.persistent
 def _claim_unsaved_bakes(filepath, *_):
     """A bake made before the file was first saved belongs to the file it is saved as (so that
@@ -334,9 +389,11 @@ def register():
     for cls in CLASSES:
         bpy.utils.register_class(cls)
     bpy.app.handlers.save_pre.append(_claim_unsaved_bakes)
+    bpy.types.VIEW3D_MT_object_quick_effects.append(_quick_effects_menu)
 
 
 def unregister():
+    bpy.types.VIEW3D_MT_object_quick_effects.remove(_quick_effects_menu)
     if _claim_unsaved_bakes in bpy.app.handlers.save_pre:
         bpy.app.handlers.save_pre.remove(_claim_unsaved_bakes)
     for job in list(_running.values()):

@@ -164,6 +164,9 @@ class PHYSICS_PT_thinburn_fire(ThinBurnPhysicsPanel, bpy.types.Panel):
         layout.prop(settings, "burnt")
         layout.prop(settings, "flakes")
         layout.operator("thinburn.add_burn_to_material", icon="MATERIAL")
+        row = layout.row(align=True)
+        row.prop(settings, "mantaflow_resolution")
+        row.operator("thinburn.add_mantaflow_fire", text="Add Mantaflow Fire", icon="FORCE_FORCE")
         cycles = getattr(context.scene, "cycles", None)
         if cycles is not None and not getattr(cycles, "volume_biased", True):
             layout.label(text="Flames render far faster with Light Paths > Volumes > Biased",

@@ -233,6 +233,15 @@ class ThinBurnSettings(bpy.types.PropertyGroup):
         name="Embers", default=1.0, min=0.0, soft_max=10.0, options=STATIC,
         description="How many sparks the fire throws off (0: none); read by the bake")
 
+    mantaflow_resolution: IntProperty(
+        name="Smoke Resolution", default=64, min=8, soft_max=256, options=STATIC,
+        description="Resolution of the Mantaflow domain that Add Mantaflow Fire makes: voxels "
+                    "along its longest side (more: finer flames, slower bakes)")
+    mantaflow_domain: PointerProperty(
+        type=bpy.types.Object, name="Smoke Domain", options=STATIC,
+        description="The Mantaflow domain Add Mantaflow Fire made for this sheet (Free Bake "
+                    "removes it and its cache folder)")
+
     show_advanced: BoolProperty(name="Advanced", default=False, options=STATIC,
                                 description="Show the material and model parameters")
     baked_file: StringProperty(
