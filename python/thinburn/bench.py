@@ -14,6 +14,11 @@ Parts (in this order; all by default):
                damped (c = 3 /s): error at T = 1 s against the closed-form damped oscillator,
                relative to the initial displacement, for several dt; plus the largest stable
                dt (bisection, undamped) at several stiffnesses against theory.
+  motion       the demo scenes (paper on its table, with and without 3 m/s wind; silk; the
+               curtain in its wind) at dt = 1/24, 1/48, 1/96 (and 1/192) s with the implicit,
+               bdf2 and symplectic integrators: RMS vertex error after 20 s (--quick: 5 s, two
+               scenes) against a backward-Euler run at 1/480 s (--quick: 1/240), over the
+               reference's RMS motion, against seconds per run (thinburn/_bench_motion.py).
   heat         thinburn.heat.kernel_sum direct vs fast (tolerance 0.01) on a random cloud;
                error = max relative error against the direct sum (direct: 0).
   ffd          FfdLattice.deform throughput, trilinear and B-spline, n = 1e3 .. 1e6 points
@@ -32,7 +37,7 @@ Parts (in this order; all by default):
                loaded by processes the bench starts itself: the all-cores / 1-thread ratio.
 
 Writes DIR/results.json (rows {part, method, resolution or dt, error or seconds, ...}; "fit"
-rows hold slopes and ratios), DIR/meta.json, DIR/speed_accuracy.png, DIR/fronts.png, DIR/stability.png,
+rows hold slopes and ratios), DIR/meta.json, DIR/speed_accuracy.png, DIR/fronts.png, DIR/stability.png, DIR/motion.png,
 DIR/performance.png, DIR/scaling.png and DIR/threads.png. One progress line per measurement on stderr.
 Seconds of kernels are the best of --repeat runs (default 3; ffd at least 10). Frames: each
 frame's fastest time over --repeat runs of the same deterministic simulation, the thread counts' runs
@@ -53,6 +58,7 @@ import time
 import numpy as np
 
 from . import _bench_fronts as fronts
+from . import _bench_motion as motion
 from . import _bench_perf as perf
 from . import _bench_threads
 from . import _core
@@ -383,11 +389,12 @@ def _writable_dir(ap, out):
         ap.error(f"--out {out!r} is not a writable directory: {exc}")
 
 
-PARTS = ("fire_front", "surface_front", "integrators", "heat") + perf.PERF_PARTS + ("threads",)
+PARTS = ("fire_front", "surface_front", "integrators", "motion", "heat") + perf.PERF_PARTS + ("threads",)
 FIGURES = (  # file, plotting function, the row parts it draws
     ("speed_accuracy.png", plot_speed_accuracy, ("fire_front", "integrators", "heat")),
     ("fronts.png", fronts.plot_fronts, ("fire_front", "surface_front")),
     ("stability.png", plot_stability, ("stability",)),
+    ("motion.png", motion.plot_motion, ("motion",)),
     ("performance.png", perf.plot_performance, ("ffd", "frames")),
     ("scaling.png", perf.plot_scaling, ("scaling", "active")),
     ("threads.png", _bench_threads.plot_threads, ("threads",)),
@@ -462,6 +469,10 @@ def main(argv=None) -> int:
         steps = [50, 100, 200, 400, 800] + ([] if args.quick else [1600, 3200, 6400])
         stiff = [0.25, 1.0, 4.0, 16.0]
         rows += bench_integrators(steps, stiff, repeat, log)
+    if "motion" in args.parts:
+        rows += motion.bench_motion([1 / 24, 1 / 48, 1 / 96] + ([] if args.quick else [1 / 192]),
+                                    1 / 240 if args.quick else 1 / 480, 5.0 if args.quick else 20.0, log,
+                                    motion.MOTION_SCENES[:2] if args.quick else motion.MOTION_SCENES)
     if "heat" in args.parts:
         counts = [100, 1000, 10000] + ([] if args.quick else [100000])
         rows += bench_heat(counts, repeat, log)
