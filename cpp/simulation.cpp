@@ -5,8 +5,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <array>
 #include <limits>
+#include <map>
 #include <stdexcept>
+#include <string>
 
 namespace thinburn {
 namespace {
@@ -46,8 +49,9 @@ std::unique_ptr<FireCells> make_cells(const RowMatX3& V, const RowMatX3i& F, con
 }  // namespace
 
 Simulation::Simulation(const RowMatX3& vertices, const RowMatX3i& faces, const RowMatX2& uv,
-                       const SimulationParams& params, const std::vector<std::uint8_t>& pinned)
-    : params_(params), vertices_(vertices), cells_(make_cells(vertices, faces, uv, params)) {
+                       const SimulationParams& params, const std::vector<std::uint8_t>& pinned,
+                       const CellMaps& maps)
+    : params_(params), vertices_(vertices), faces_(faces), cells_(make_cells(vertices, faces, uv, params)) {
   if (!(params.v0 > 0)) throw std::invalid_argument("v0 must be > 0");
   if (!(params.burn_duration > 0)) throw std::invalid_argument("burn_duration must be > 0");
   if (!(params.ash_strength >= 0 && params.ash_strength <= 1)) throw std::invalid_argument("ash_strength must be in [0, 1]");
@@ -64,6 +68,7 @@ Simulation::Simulation(const RowMatX3& vertices, const RowMatX3i& faces, const R
   }
   if (!pinned.empty() && pinned.size() != static_cast<std::size_t>(vertices.rows()))
     throw std::invalid_argument("pinned: one flag per vertex expected");
+  apply_maps(faces, maps);
   if (params.shell) {
     if (grid_)
       shell_ = std::make_unique<Shell>(grid_->sheet(), shell_params(), mass_, pinned);
@@ -71,6 +76,31 @@ Simulation::Simulation(const RowMatX3& vertices, const RowMatX3i& faces, const R
       shell_ = std::make_unique<Shell>(surface_->surface(), vertices, faces, shell_params(), mass_, pinned);
   }
   build_locator();
+}
+
+void Simulation::apply_maps(const RowMatX3i& faces, const CellMaps& maps) {
+  auto read = [&](const Eigen::VectorXd& m, const char* name) {
+    if (m.size() != vertices_.rows())
+      throw std::invalid_argument(std::string(name) + ": one value per vertex expected (" +
+                                  std::to_string(vertices_.rows()) + "), got " + std::to_string(m.size()));
+    if (!m.allFinite() || (m.array() < 0).any())
+      throw std::invalid_argument(std::string(name) + ": values must be finite and >= 0");
+    return vertex_field_at_cells(*cells_, vertices_, faces, m);
+  };
+  // Fuel is how much there is to burn: the flame stays that much longer on a cell. The mass
+  // (what the lattice carries) stays the material's, so a painted map changes the fire, not
+  // the sheet's weight, and fuel 0 leaves no massless cells for the motion.
+  if (maps.speed.size()) {
+    const std::vector<double> s = read(maps.speed, "speed_map");
+    for (int c = 0; c < cells_->size(); ++c) v_scale_[c] *= s[c];
+  }
+  if (maps.fuel.size()) {
+    const std::vector<double> f = read(maps.fuel, "fuel_map");
+    for (int c = 0; c < cells_->size(); ++c) {
+      if (f[c] > 0) duration_[c] *= f[c];
+      else v_scale_[c] = 0.0;  // nothing to burn: a firebreak
+    }
+  }
 }
 
 void Simulation::bind_cells() {
@@ -165,7 +195,7 @@ double Simulation::grad2(int cell) const { return cells_->grad2(cell, view_); }
 
 double Simulation::cell_speed(int cell) const {
   const double v0 = params_.v0 * v_scale_[cell];
-  return std::max(params_.v_floor, 1.0 - params_.cv * grad2(cell)) * v0;
+  return std::max(params_.v_floor, 1.0 - params_.cv * grad2(cell)) * v0 * speed_scale_;
 }
 
 LocalSpeed Simulation::local_speed(int cell) const {
@@ -182,7 +212,8 @@ Eigen::Vector3d Simulation::drive() const {
 void Simulation::refresh_law() { law_.drive = drive(); }
 
 int Simulation::ignite(const Eigen::Vector3d& point, double t, double radius) {
-  const std::vector<int> lit = cells_near(point, radius);
+  std::vector<int> lit = cells_near(point, radius);
+  lit.erase(std::remove_if(lit.begin(), lit.end(), [this](int c) { return is_firebreak(c); }), lit.end());
   // The front cannot rewrite cells it has already accepted, so an ignition time before the
   // last step is taken as that step's end: the fire starts now and catches up from there.
   const double t0 = std::max(t, cells_->front_time());
@@ -192,6 +223,67 @@ int Simulation::ignite(const Eigen::Vector3d& point, double t, double radius) {
   else
     for (int c : lit) cells_->ignite(c, t0, law_, view_);
   return static_cast<int>(lit.size());
+}
+
+int Simulation::ignite_cells(const std::vector<int>& cells, double t) {
+  const double t0 = std::max(t, cells_->front_time());
+  refresh_law();
+  int lit = 0;
+  for (int c : cells) {
+    if (c < 0 || c >= cells_->size())
+      throw std::invalid_argument("cells: index " + std::to_string(c) + " outside [0, " + std::to_string(cells_->size()) + ")");
+    if (!cells_->inside()[c] || is_firebreak(c) || state_[c] != kUnburnt) continue;
+    cells_->ignite(c, t0, law_, view_);
+    ++lit;
+  }
+  return lit;
+}
+
+int Simulation::ignite_near(const RowMatX3& points, double radius, double t) {
+  if (!(radius >= 0) || !std::isfinite(radius)) throw std::invalid_argument("radius must be >= 0 and finite");
+  if (points.rows() == 0) return 0;
+  // Points in buckets of the radius (at least a cell's spacing): a cell looks in the 27 around it.
+  const double h = std::max(radius, cells_->spacing());
+  auto key = [h](const Eigen::Vector3d& p) {
+    const Eigen::Vector3d q = (p / h).array().floor();
+    return std::array<std::int64_t, 3>{static_cast<std::int64_t>(q.x()), static_cast<std::int64_t>(q.y()),
+                                       static_cast<std::int64_t>(q.z())};
+  };
+  std::map<std::array<std::int64_t, 3>, std::vector<int>> buckets;
+  for (Eigen::Index i = 0; i < points.rows(); ++i) buckets[key(points.row(i).transpose())].push_back(static_cast<int>(i));
+  const double r2 = radius * radius;
+  std::vector<int> near;
+  for (int c = 0; c < cells_->size(); ++c) {
+    if (!cells_->inside()[c] || state_[c] != kUnburnt || is_firebreak(c)) continue;
+    const Eigen::Vector3d p = cell_position(c);
+    const auto k = key(p);
+    bool found = false;
+    for (int dx = -1; dx <= 1 && !found; ++dx)
+      for (int dy = -1; dy <= 1 && !found; ++dy)
+        for (int dz = -1; dz <= 1 && !found; ++dz) {
+          const auto it = buckets.find({k[0] + dx, k[1] + dy, k[2] + dz});
+          if (it == buckets.end()) continue;
+          for (int i : it->second)
+            if ((points.row(i).transpose() - p).squaredNorm() <= r2) {
+              found = true;
+              break;
+            }
+        }
+    if (found) near.push_back(c);
+  }
+  return ignite_cells(near, t);
+}
+
+std::vector<double> Simulation::vertex_field(const Eigen::VectorXd& values) const {
+  if (values.size() != vertices_.rows())
+    throw std::invalid_argument("values: one per vertex expected (" + std::to_string(vertices_.rows()) + "), got " +
+                                std::to_string(values.size()));
+  return vertex_field_at_cells(*cells_, vertices_, faces_, values);
+}
+
+void Simulation::set_speed_scale(double s) {
+  if (!(s > 0) || !std::isfinite(s)) throw std::invalid_argument("speed_scale must be > 0 and finite");
+  speed_scale_ = s;
 }
 
 std::vector<int> Simulation::scan_cells_near(const Eigen::Vector3d& point, double radius, double* nearest_distance,

@@ -61,16 +61,39 @@ struct SimulationParams {
   BendingParams bending;
 };
 
+/// @brief Painted maps, one value >= 0 per input vertex; an empty map is 1 everywhere (and
+/// costs nothing: the simulation is bit-identical to one without it). Read at the cells by
+/// vertex_field_at_cells. 0 in either map is a firebreak: the cell never burns.
+struct CellMaps {
+  Eigen::VectorXd speed;  ///< multiplies V0 (eq 1)
+  Eigen::VectorXd fuel;   ///< multiplies the burn duration
+};
+
 class Simulation {
  public:
   /// @param pinned per input vertex, nonzero = held in place (may be empty).
+  /// @param maps painted speed and fuel (docs/fire_front.md, "Painted maps").
   Simulation(const RowMatX3& vertices, const RowMatX3i& faces, const RowMatX2& uv,
-             const SimulationParams& params, const std::vector<std::uint8_t>& pinned = {});
+             const SimulationParams& params, const std::vector<std::uint8_t>& pinned = {},
+             const CellMaps& maps = {});
 
   /// @brief Ignite the inside cells within radius of a point (the nearest one when radius is 0)
-  /// at time t. Throws std::invalid_argument when no cell lies within reach of the point.
-  /// @return the number of cells lit.
+  /// at time t; firebreak cells within it stay unlit. Throws std::invalid_argument when no cell
+  /// lies within reach of the point.
+  /// @return the number of cells lit (0 when all of them are firebreaks).
   int ignite(const Eigen::Vector3d& point, double t, double radius);
+  /// @brief Ignite the given cells at time t (firebreaks, cells outside the sheet and cells
+  /// already alight are skipped). @return the number lit.
+  int ignite_cells(const std::vector<int>& cells, double t);
+  /// @brief Ignite every unburnt cell within radius of any of the points now (a mesh igniter's
+  /// surface, sampled); points may lie anywhere. @return the number lit.
+  int ignite_near(const RowMatX3& points, double radius, double t);
+  /// @brief A per-vertex field read at every cell (vertex_field_at_cells).
+  std::vector<double> vertex_field(const Eigen::VectorXd& values) const;
+  /// @brief Multiplies every cell's speed from now on (1: as the material says); > 0. For a
+  /// burn timed to a duration (docs/fire_front.md, "Burn duration").
+  void set_speed_scale(double s);
+  double speed_scale() const { return speed_scale_; }
   /// @brief The cells ignite(point, t, radius) would light, ascending; throws as ignite does.
   std::vector<int> cells_near(const Eigen::Vector3d& point, double radius) const;
   /// @brief Advance by dt seconds (dt > 0). Atomic: a step that throws (an explicit integrator
@@ -99,6 +122,8 @@ class Simulation {
   /// @brief Fringe cells (paper §3.1): burning cells with a neighbour neither burning nor burnt.
   std::vector<int> fringe() const;
   void fringe_into(std::vector<int>& out) const;
+  /// @brief 1 where a cell can never burn (a painted 0 in the speed or fuel map).
+  bool is_firebreak(int cell) const { return v_scale_[cell] == 0.0; }
   /// @brief Char per cell in [0, 1]: 0 before ignition, rising over the burn, 1 when burnt.
   std::vector<double> cell_char() const;
   /// @brief Remaining mass per cell, kg.
@@ -158,10 +183,13 @@ class Simulation {
   void refresh_law();
   Eigen::Vector3d drive() const;  // eq 1's world drive now: climb and wind
   double noise(int cell, std::uint64_t stream) const;
+  void apply_maps(const RowMatX3i& faces, const CellMaps& maps);
   std::vector<int> scan_cells_near(const Eigen::Vector3d& point, double radius, double* nearest_distance, int* nearest) const;
 
   SimulationParams params_;
   RowMatX3 vertices_;
+  RowMatX3i faces_;
+  double speed_scale_ = 1.0;
   std::unique_ptr<FireCells> cells_;
   const GridCells* grid_ = nullptr;    // cells_ when it is the grid
   const ShellCells* surface_ = nullptr;  // cells_ when it is on the surface

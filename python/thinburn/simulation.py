@@ -101,6 +101,12 @@ class Simulation:
         paper's eqs 13-15); explicit ones substep as stability needs or raise.
     shell : False switches the paper's §4 off: no lattice, particles or motion; the sheet keeps
         its rest shape and only the fire runs.
+    speed_map : None or (n,) values >= 0, one per vertex: painted spread speed, multiplying
+        eq 1's V0 where the fire is (2: twice as fast, 0: a firebreak that never burns).
+    fuel_map : None or (n,) values >= 0, one per vertex: painted fuel, multiplying how long a
+        cell burns (2: flames stay twice as long; 0: nothing to burn, a firebreak). The maps are
+        read at every cell from the triangle under it (docs/fire_front.md, "Painted maps");
+        ``ignite`` lights no firebreak cell and returns how many it did light.
     **params : overrides of the model's scalars. A wrong type (text, a float where an int is
         due, a bool where a number is, a scalar for ``gravity``'s 3 components) raises
         TypeError, a bad value (NaN, inf, out of range, an int beyond a C int) ValueError; both
@@ -134,7 +140,8 @@ class Simulation:
 
     def __init__(self, vertices, faces, uv=None, material="paper", cells=128, seed=0,
                  threads=None, front="fmm", lattice=None, pinned=None, floor=None,
-                 integrator="implicit", shell=True, geometry="auto", **params):
+                 integrator="implicit", shell=True, geometry="auto", speed_map=None, fuel_map=None,
+                 **params):
         verts = V.real_array(vertices, "vertices", (-1, 3))
         if len(verts) < 3:
             raise ValueError(f"vertices: an empty mesh (need >= 3 vertices, got {len(verts)})")
@@ -169,7 +176,8 @@ class Simulation:
                                  f"{verts[:, 2].min():.6g} < floor {p.floor_z:.6g})")
         _set_group(p.set_dynamics, None, {"integrator": V.choice(integrator, "integrator", INTEGRATORS)})
         pins = _pinned_mask(pinned, len(verts))
-        self._sim = _Serialised(_core.Simulation(verts, tris, uvs, p, pins))
+        maps = [_vertex_map(m, name, len(verts)) for m, name in ((speed_map, "speed_map"), (fuel_map, "fuel_map"))]
+        self._sim = _Serialised(_core.Simulation(verts, tris, uvs, p, pins, *maps))
         self.n_vertices = len(verts)
 
     @staticmethod
@@ -239,6 +247,35 @@ class Simulation:
         t = self.time if time is None else V.real(time, "time", low=0.0)
         r = V.real(radius, "radius", low=0.0)
         return self._sim.ignite(p, t, r)
+
+    def ignite_map(self, values, time=None, threshold=0.5) -> int:
+        """Ignite every cell where a painted per-vertex map (n,) reaches ``threshold``: the map
+        is read at the cells as ``speed_map`` is, so a vertex group lights the area painted,
+        not only its vertices. Firebreaks stay unlit. Returns the number of cells lit."""
+        m = V.real_array(values, "values", (self.n_vertices,))
+        t = self.time if time is None else V.real(time, "time", low=0.0)
+        thr = V.real(threshold, "threshold")
+        field = np.asarray(self._sim.vertex_field(m))
+        return self._sim.ignite_cells(np.flatnonzero(field >= thr).astype(np.int32).tolist(), t)
+
+    def ignite_near(self, points, radius, time=None) -> int:
+        """Ignite every unburnt cell within ``radius`` (m) of any of ``points`` (k, 3), where the
+        cells are now: a mesh igniter's surface, sampled at most about a radius apart, lights
+        the cells it touches. Points far from the sheet light nothing (no error). Returns the
+        number of cells lit."""
+        pts = V.real_array(points, "points", (-1, 3))
+        r = V.real(radius, "radius", low=0.0)
+        t = self.time if time is None else V.real(time, "time", low=0.0)
+        return self._sim.ignite_near(pts, r, t)
+
+    @property
+    def speed_scale(self) -> float:
+        """Multiplies every cell's spread speed from now on (1: the material's); > 0."""
+        return self._sim.speed_scale
+
+    @speed_scale.setter
+    def speed_scale(self, value) -> None:
+        self._sim.speed_scale = V.real(value, "speed_scale", low=0.0, low_open=True)
 
     def cells_near(self, point, radius=0.0) -> np.ndarray:
         """The cells ``ignite(point, radius=radius)`` would light: the nearest inside cell, or
@@ -435,6 +472,11 @@ class Simulation:
         """(N, N) uint8: 1 where the cell is part of the sheet."""
         return self._sim.inside()
 
+    def firebreaks(self) -> np.ndarray:
+        """(N, N) bool, (num_cells,) on a surface: cells that never burn (a painted 0 in
+        ``speed_map`` or ``fuel_map``)."""
+        return self._sim.firebreaks().astype(bool)
+
     def cell_states(self) -> np.ndarray:
         """(N, N) uint8: 0 unburnt, 1 burning, 2 burnt."""
         return self._sim.cell_states()
@@ -593,6 +635,18 @@ def _set_group(setter, prefix, values: dict) -> None:
         elif prefix == "material":
             msg = f"material: {msg}"
         raise type(exc)(msg) from None
+
+
+def _vertex_map(values, name: str, n: int) -> np.ndarray:
+    """A painted per-vertex map (speed_map, fuel_map): None is empty (the map is off)."""
+    if values is None:
+        return np.zeros(0)
+    a = V.real_array(values, name, (n,), finite=False)
+    bad = np.flatnonzero(~np.isfinite(a) | (a < 0))
+    if len(bad):
+        raise ValueError(f"{name}: values must be finite and >= 0 (0 = never burns); vertex {bad[0]} "
+                         f"holds {a[bad[0]]:g}")
+    return np.ascontiguousarray(a, dtype=np.float64)
 
 
 def _pinned_mask(pinned, n: int) -> np.ndarray:
