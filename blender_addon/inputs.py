@@ -24,6 +24,7 @@ class FrameSample:
     igniters: list
     wind: tuple
     dynamics: dict  # the keyframeable motion parameters and the scene's gravity
+    surfaces: list = None  # each lit mesh igniter's (surface points (k, 3), radius)
 
 
 def sheet_geometry(obj):
@@ -99,16 +100,102 @@ def floor_height(scene, settings):
 
 
 def igniter_objects(obj, settings) -> list:
-    """The igniters of a sheet (names), or a BakeError that says what to do."""
+    """The igniters of a sheet (names), or a BakeError that says what to do. A sheet lit by
+    its Ignite map needs none."""
     coll = settings.igniter_collection
+    painted = bool(settings.ignite_map)
     if coll is None:
+        if painted:
+            return []
         raise BakeError(f"no igniters: set an Igniter collection on '{obj.name}' "
-                        "(Physics > ThinBurn) and put an Empty in it")
+                        "(Physics > ThinBurn) and put an Empty or a mesh in it, or paint where "
+                        "it starts (Physics > ThinBurn > Painted > Ignite)")
     names = [o.name for o in coll.all_objects if o.name != obj.name]
-    if not names:
+    if not names and not painted:
         raise BakeError(f"no igniters: the collection '{coll.name}' is empty; add an Empty "
-                        "and keyframe its ThinBurn Igniter strength")
+                        "or a mesh and keyframe its ThinBurn Igniter strength")
     return names
+
+
+# --- painted maps ---------------------------------------------------------------------------------
+MAP_LABELS = {"speed_map": "Speed", "fuel_map": "Fuel", "ignite_map": "Ignite"}
+
+
+def vertex_map(obj, settings, key: str):
+    """(n,) float values of a painted map (a vertex group's weights, unassigned vertices 0, or
+    a float attribute on the vertices), or None when the map is not set."""
+    name = getattr(settings, key)
+    if not name:
+        return None
+    label = MAP_LABELS[key]
+    mesh = obj.data
+    n = len(mesh.vertices)
+    if getattr(settings, key + "_from") == "GROUP":
+        group = obj.vertex_groups.get(name)
+        if group is None:
+            raise BakeError(f"{label} map: '{name}' is not a vertex group of '{obj.name}': pick one "
+                            "in Physics > ThinBurn > Painted, or switch it to Attribute")
+        values = np.zeros(n)
+        index = group.index
+        for v in mesh.vertices:
+            for g in v.groups:
+                if g.group == index:
+                    values[v.index] = g.weight
+        return values
+    attr = mesh.attributes.get(name)
+    if attr is None:
+        raise BakeError(f"{label} map: '{obj.name}' has no attribute '{name}': pick one in "
+                        "Physics > ThinBurn > Painted, or switch it to Vertex Group")
+    if attr.domain != "POINT" or attr.data_type not in {"FLOAT", "INT", "BOOLEAN"}:
+        raise BakeError(f"{label} map: attribute '{name}' holds {attr.data_type.lower()} values on "
+                        f"the {attr.domain.lower()} domain; paint a Float attribute on vertices (Point)")
+    field = "value"
+    raw = np.zeros(n, dtype=np.float64 if attr.data_type == "FLOAT" else
+                   (np.int32 if attr.data_type == "INT" else bool))
+    attr.data.foreach_get(field, raw)
+    values = raw.astype(np.float64)
+    if not np.all(np.isfinite(values)) or (values < 0).any():
+        bad = values[~np.isfinite(values) | (values < 0)][0]
+        raise BakeError(f"{label} map: attribute '{name}' holds {bad:g}; paint values of 0 "
+                        "(never burns) or more (1: the material's own)")
+    return values
+
+
+def surface_points(obj, spacing: float, limit: int = 200_000) -> np.ndarray:
+    """(k, 3) world points on a mesh igniter's faces, at most about ``spacing`` apart (its
+    vertices and points spread over each triangle), so that the cells within an igniter's
+    radius of its surface are those within that radius of a point, to within spacing."""
+    mesh = obj.data
+    n = len(mesh.vertices)
+    co = np.empty(3 * n)
+    mesh.vertices.foreach_get("co", co)
+    mw = np.array(obj.matrix_world, dtype=np.float64)
+    world = co.reshape(n, 3) @ mw[:3, :3].T + mw[:3, 3]
+    mesh.calc_loop_triangles()
+    tris = np.empty(3 * len(mesh.loop_triangles), dtype=np.int32)
+    mesh.loop_triangles.foreach_get("vertices", tris)
+    tris = tris.reshape(-1, 3)
+    out = [world]
+    if len(tris) and spacing > 0:
+        a, b, c = (world[tris[:, k]] for k in range(3))
+        longest = np.max([np.linalg.norm(b - a, axis=1), np.linalg.norm(c - b, axis=1),
+                          np.linalg.norm(a - c, axis=1)], axis=0)
+        splits = np.ceil(longest / spacing).astype(int)
+        total = len(world)
+        for m in np.unique(splits[splits > 1]):
+            sel = splits == m
+            i, j = np.meshgrid(np.arange(m + 1), np.arange(m + 1), indexing="ij")
+            keep = (i + j) <= m
+            wb, wc = i[keep] / m, j[keep] / m
+            wa = 1.0 - wb - wc
+            pts = (wa[None, :, None] * a[sel][:, None] + wb[None, :, None] * b[sel][:, None]
+                   + wc[None, :, None] * c[sel][:, None]).reshape(-1, 3)
+            total += len(pts)
+            if total > limit:
+                raise BakeError(f"igniter '{obj.name}' is too large for its fire cells ({total} "
+                                "points to test): use a smaller igniter mesh or lower Fire Detail")
+            out.append(pts)
+    return np.concatenate(out)
 
 
 def wind_objects(view_layer) -> list:
@@ -194,8 +281,11 @@ def wind_warnings(view_layer) -> list:
     return out
 
 
-def sample_frame(scene, frame: int, sheet_name: str, igniters: list, winds: list) -> FrameSample:
-    """Move the scene to ``frame`` and read the igniters and the wind.
+def sample_frame(scene, frame: int, sheet_name: str, igniters: list, winds: list,
+                 spacing: float = 0.0) -> FrameSample:
+    """Move the scene to ``frame`` and read the igniters and the wind. Empties (any object
+    but a mesh) light around their origin; mesh igniters around their surface, sampled
+    ``spacing`` apart.
 
     frame_set evaluates the scene and writes animated values and world matrices back to the
     original objects (those of the active depsgraph), which is what is read here.
@@ -205,10 +295,14 @@ def sample_frame(scene, frame: int, sheet_name: str, igniters: list, winds: list
     for name in (sheet_name, *igniters, *winds):
         if objects.get(name) is None:
             raise BakeError(f"'{name}' was deleted or renamed during the bake")
-    samples = []
+    samples, surfaces = [], []
     for name in igniters:
         ob = objects[name]
         ig = ob.thinburn_igniter
+        if ob.type == "MESH":  # its surface lights the cells within its radius while lit
+            if ig.strength > 0.0:
+                surfaces.append((surface_points(ob, spacing), float(ig.radius)))
+            continue
         samples.append((np.array(ob.matrix_world.translation, dtype=np.float64),
                         float(ig.strength), float(ig.radius)))
     wind = np.zeros(3)
@@ -220,7 +314,8 @@ def sample_frame(scene, frame: int, sheet_name: str, igniters: list, winds: list
             wind += axis / length * ob.field.strength
     settings = objects[sheet_name].thinburn
     wind *= settings.wind_scale
-    return FrameSample(frame, samples, tuple(float(w) for w in wind), dynamics(scene, settings))
+    return FrameSample(frame, samples, tuple(float(w) for w in wind), dynamics(scene, settings),
+                       surfaces)
 
 
 def dynamics(scene, settings) -> dict:

@@ -186,6 +186,18 @@ class BakeJob:
             if not core_supports("pinned"):
                 raise BakeError("this thinburn core cannot pin vertices yet: clear the Pin Group")
             kwargs["pinned"] = inputs.pin_mask(obj, settings.pin_group)
+        for key in ("speed_map", "fuel_map"):
+            values = inputs.vertex_map(obj, settings, key)
+            if values is not None:
+                kwargs[key] = values
+        self.ignite_values = inputs.vertex_map(obj, settings, "ignite_map")
+        self.ignite_index = None
+        if self.ignite_values is not None:
+            if not settings.frame_start <= settings.ignite_frame <= settings.frame_end:
+                raise BakeError(f"Ignite Frame {settings.ignite_frame} is outside the bake's frames "
+                                f"{settings.frame_start}–{settings.frame_end}: set it in Physics > "
+                                "ThinBurn > Painted")
+            self.ignite_index = settings.ignite_frame - settings.frame_start
         floor = inputs.floor_height(self.scene, settings)
         if floor is not None:
             if not core_supports("floor"):
@@ -238,7 +250,7 @@ class BakeJob:
             while self.next_sample <= need:
                 frame = self.frames[self.next_sample]
                 self.samples[self.next_sample] = inputs.sample_frame(
-                    self.scene, frame, self.obj_name, self.igniters, self.winds)
+                    self.scene, frame, self.obj_name, self.igniters, self.winds, self.spacing)
                 if self.moved_at is None and not np.allclose(
                         np.array(bpy.data.objects[self.obj_name].matrix_world), self.matrix,
                         rtol=0.0, atol=1e-6):
@@ -263,8 +275,12 @@ class BakeJob:
         if self.shell:
             changed = {key: v for key, v in here.dynamics.items() if self.dynamics.get(key) != v}
             self.dynamics.update(changed)
+        # A mesh igniter lights the cells within its radius of its surface (at least the
+        # surface's sampling, half a cell, so that radius 0 still touches the sheet).
+        surfaces = [(pts, max(radius, self.spacing), k * self.dt) for pts, radius in (here.surfaces or [])]
+        painted = self.ignite_values if k == self.ignite_index else None
         return FrameTask(index=k, ignitions=ignitions, wind=here.wind, dynamics=changed,
-                         step=not last)
+                         step=not last, surfaces=surfaces, painted=painted)
 
     def _drain(self, block: bool) -> None:
         while not self.finished:

@@ -25,6 +25,8 @@ class FrameTask:
     wind: tuple = (0.0, 0.0, 0.0)   # m/s, blowing during the step that follows
     dynamics: dict = field(default_factory=dict)  # motion parameters that changed
     step: bool = True               # False on the last frame
+    surfaces: list = field(default_factory=list)  # mesh igniters: (points (k, 3), radius m, time s)
+    painted: object = None          # (n,) Ignite map values to light at this frame's start
 
 
 def path_ignitions(start, end, t0: float, dt: float, spacing: float) -> list:
@@ -114,6 +116,10 @@ class CoreWorker(threading.Thread):
                 lit += sim.ignite(point, time=time, radius=radius)
             except ValueError:
                 pass  # the igniter is off the sheet: it lights nothing (counted as lit == 0)
+        for points, radius, time in task.surfaces:
+            lit += sim.ignite_near(points, radius=radius, time=time)
+        if task.painted is not None:
+            lit += sim.ignite_map(task.painted, time=task.index * self._dt)
         positions = np.array(sim.vertex_positions(), dtype=np.float64, copy=True)
         particles = None
         if self._want_particles:
