@@ -76,6 +76,115 @@ Simulation::Simulation(const RowMatX3& vertices, const RowMatX3i& faces, const R
       shell_ = std::make_unique<Shell>(surface_->surface(), vertices, faces, shell_params(), mass_, pinned);
   }
   build_locator();
+  if (params.finish_within > 0) {
+    if (!std::isfinite(params.finish_within)) throw std::invalid_argument("finish_within must be finite");
+    plan_cells_ = cells_->clone();
+    // Each cell burns at most half the time: the rest is for the fire to travel.
+    double longest = 0.0;
+    for (int c = 0; c < nc; ++c)
+      if (cells_->inside()[c] && !is_firebreak(c)) longest = std::max(longest, duration_[c]);
+    const double cut = longest > 0 ? std::min(1.0, 0.5 * params.finish_within / longest) : 1.0;
+    for (double& d : duration_) d *= cut;
+  }
+}
+
+void Simulation::note_sources(const std::vector<int>& lit, double t0) {
+  if (!plan_cells_ || lit.empty()) return;
+  if (pace_.t0 < 0 || t0 < pace_.t0) pace_.t0 = t0;
+  for (int c : lit) {
+    auto it = std::lower_bound(pace_.sources.begin(), pace_.sources.end(), c);
+    if (it != pace_.sources.end() && *it == c) continue;
+    pace_.sources.insert(it, c);
+    pace_.stale = true;
+  }
+}
+
+void Simulation::replan() {
+  // Arrival times over the rest shape from every source at once, at the painted speeds with
+  // no slope factor and no drive: how far each cell is, in seconds of the material's speed.
+  std::unique_ptr<FireCells> f = plan_cells_->clone();
+  SpreadLaw law;
+  law.v = [this](int c) { return params_.v0 * v_scale_[c]; };
+  CellView rest;
+  rest.position = [&f](int c) { return f->rest(c); };
+  rest.normal = [&f](int c) { return f->rest_normal(c); };
+  rest.reference_normal = rest.normal;
+  for (int c : pace_.sources) f->ignite(c, 0.0, law, rest);
+  f->advance(std::numeric_limits<double>::max(), law, rest);
+  pace_.tau = f->arrival();
+  pace_.order.clear();
+  for (int c = 0; c < f->size(); ++c)
+    if (std::isfinite(pace_.tau[c]) && cells_->inside()[c]) pace_.order.push_back(c);
+  std::sort(pace_.order.begin(), pace_.order.end(), [this](int a, int b) {
+    return pace_.tau[a] < pace_.tau[b] || (pace_.tau[a] == pace_.tau[b] && a < b);
+  });
+  pace_.cum.resize(pace_.order.size());
+  double sum = 0.0;
+  for (std::size_t k = 0; k < pace_.order.size(); ++k) pace_.cum[k] = (sum += cells_->area(pace_.order[k]));
+  // The last cells to catch fire (the farthest 2 % of the area) burn out last: the spread must
+  // end their longest burn before the target (the longest burn anywhere ended most fires
+  // 5-10 % early, the duration noise being about that share of a short target).
+  double last = 0.0;
+  for (std::size_t k = pace_.order.size(); k-- > 0;) {
+    last = std::max(last, duration_[pace_.order[k]]);
+    if (sum - (k ? pace_.cum[k - 1] : 0.0) >= 0.02 * sum) break;
+  }
+  pace_.window = params_.finish_within - last;
+  pace_.stale = false;
+  pace_.has_prev = false;
+  pace_.covered = pace_.scaled = 0.0;
+}
+
+double Simulation::tau_covered() const {
+  // The fire's progress in tau: the tau by which as much reachable area is lit as is lit now.
+  // The whole front counts, so a corner the curl slows holds the pace back as it should.
+  double lit = 0.0;
+  for (int c : pace_.order)
+    if (state_[c] != kUnburnt) lit += cells_->area(c);
+  if (pace_.order.empty()) return 0.0;
+  const auto it = std::lower_bound(pace_.cum.begin(), pace_.cum.end(), lit);
+  if (it == pace_.cum.end()) return pace_.tau[pace_.order.back()];
+  const std::size_t k = static_cast<std::size_t>(it - pace_.cum.begin());
+  const double lo_area = k ? pace_.cum[k - 1] : 0.0, lo_tau = k ? pace_.tau[pace_.order[k - 1]] : 0.0;
+  const double share = (lit - lo_area) / std::max(pace_.cum[k] - lo_area, 1e-300);
+  return lo_tau + share * (pace_.tau[pace_.order[k]] - lo_tau);
+}
+
+void Simulation::pace_step(double dt) {
+  // Per-step feedback on the speed scale: the tau still to cover over the time left, divided
+  // by the efficiency, how much tau a second of scale really covers (eq 1's slope factor on a
+  // curled sheet, the drive, the front's band holding times set at an older scale). The
+  // efficiency is the ratio of decayed sums over a window of 15 % of the target, and the scale
+  // moves by at most dt / (5 % of the target) a step: the front answers a change only after a
+  // cell or two, and a faster loop oscillates (a lantern at 40 cells did, finishing 15 % early).
+  if (!plan_cells_ || pace_.t0 < 0) return;
+  if (pace_.stale) replan();
+  if (pace_.order.empty()) return;
+  constexpr double kMinScale = 1e-3, kMaxScale = 1e3;
+  const double target = params_.finish_within;
+  const double window = std::max(0.15 * target, 4.0 * dt);
+  const double covered = tau_covered();
+  if (pace_.has_prev && pace_.prev_dt > 0) {
+    const double keep = std::exp(-pace_.prev_dt / window);
+    pace_.covered = keep * pace_.covered + (covered - pace_.prev_tau);
+    pace_.scaled = keep * pace_.scaled + speed_scale_ * pace_.prev_dt;
+  }
+  // A prior of a quarter window at efficiency 1, so the first steps' few cells do not rule.
+  const double prior = 0.25 * window * speed_scale_;
+  const double eta = std::clamp((pace_.covered + prior) / (pace_.scaled + prior), 0.05, 2.0);
+  const double remaining = pace_.tau[pace_.order.back()] - covered;
+  const double left = pace_.t0 + pace_.window - time_;
+  if (remaining > 0) {
+    double want = left > dt ? remaining / (left * eta) : kMaxScale;
+    if (pace_.has_prev) {
+      const double step = 1.0 + dt / (0.05 * target);
+      want = std::clamp(want, speed_scale_ / step, speed_scale_ * step);
+    }
+    speed_scale_ = std::clamp(want, kMinScale, kMaxScale);
+  }
+  pace_.prev_tau = covered;
+  pace_.prev_dt = dt;
+  pace_.has_prev = true;
 }
 
 void Simulation::apply_maps(const RowMatX3i& faces, const CellMaps& maps) {
@@ -85,7 +194,7 @@ void Simulation::apply_maps(const RowMatX3i& faces, const CellMaps& maps) {
                                   std::to_string(vertices_.rows()) + "), got " + std::to_string(m.size()));
     if (!m.allFinite() || (m.array() < 0).any())
       throw std::invalid_argument(std::string(name) + ": values must be finite and >= 0");
-    return vertex_field_at_cells(*cells_, vertices_, faces, m);
+    return vertex_field_at_cells(*cells_, vertices_, faces, m, true);
   };
   // Fuel is how much there is to burn: the flame stays that much longer on a cell. The mass
   // (what the lattice carries) stays the material's, so a painted map changes the fire, not
@@ -222,21 +331,23 @@ int Simulation::ignite(const Eigen::Vector3d& point, double t, double radius) {
     cells_->ignite_point(lit[0], point - cell_position(lit[0]), t0, law_, view_);
   else
     for (int c : lit) cells_->ignite(c, t0, law_, view_);
+  note_sources(lit, t0);
   return static_cast<int>(lit.size());
 }
 
 int Simulation::ignite_cells(const std::vector<int>& cells, double t) {
   const double t0 = std::max(t, cells_->front_time());
   refresh_law();
-  int lit = 0;
+  std::vector<int> lit;
   for (int c : cells) {
     if (c < 0 || c >= cells_->size())
       throw std::invalid_argument("cells: index " + std::to_string(c) + " outside [0, " + std::to_string(cells_->size()) + ")");
     if (!cells_->inside()[c] || is_firebreak(c) || state_[c] != kUnburnt) continue;
     cells_->ignite(c, t0, law_, view_);
-    ++lit;
+    lit.push_back(c);
   }
-  return lit;
+  note_sources(lit, t0);
+  return static_cast<int>(lit.size());
 }
 
 int Simulation::ignite_near(const RowMatX3& points, double radius, double t) {
@@ -278,7 +389,7 @@ std::vector<double> Simulation::vertex_field(const Eigen::VectorXd& values) cons
   if (values.size() != vertices_.rows())
     throw std::invalid_argument("values: one per vertex expected (" + std::to_string(vertices_.rows()) + "), got " +
                                 std::to_string(values.size()));
-  return vertex_field_at_cells(*cells_, vertices_, faces_, values);
+  return vertex_field_at_cells(*cells_, vertices_, faces_, values, false);
 }
 
 void Simulation::set_speed_scale(double s) {
@@ -331,6 +442,8 @@ struct Simulation::Saved {
   std::vector<int> burning;
   std::vector<double> mass;
   Shell::Checkpoint shell;
+  Pace pace;
+  double speed_scale;
 };
 
 bool Simulation::step_may_throw() const {
@@ -340,7 +453,7 @@ bool Simulation::step_may_throw() const {
 }
 
 Simulation::Saved Simulation::save() const {
-  return Saved{time_, cells_->clone(), state_, burning_, mass_, shell_->checkpoint()};
+  return Saved{time_, cells_->clone(), state_, burning_, mass_, shell_->checkpoint(), pace_, speed_scale_};
 }
 
 void Simulation::restore(Saved&& s) {
@@ -351,6 +464,8 @@ void Simulation::restore(Saved&& s) {
   burning_ = std::move(s.burning);
   mass_ = std::move(s.mass);
   shell_->rollback(std::move(s.shell));
+  pace_ = std::move(s.pace);
+  speed_scale_ = s.speed_scale;
   locator_stale_ = true;
 }
 
@@ -368,6 +483,7 @@ void Simulation::step(double dt) {
 
 void Simulation::step_unguarded(double dt) {
   const double t_end = time_ + dt;
+  pace_step(dt);
   refresh_law();
   for (int c : cells_->advance(t_end, law_, view_)) {
     if (state_[c] != kUnburnt) continue;

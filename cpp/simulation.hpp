@@ -41,6 +41,9 @@ struct SimulationParams {
   double v_floor = 0.05;       ///< fraction of V0 below which V never falls
   double speed_noise = 0.0;    ///< relative per-cell jitter of V0 (seeded), breaks grid symmetry
   double burn_duration = 4.0;  ///< s a cell burns before it is burnt
+  /// s from the first ignition until every cell the fire can reach has burnt out; 0: off, the
+  /// material's speed (docs/fire_front.md, "Finishing within a time").
+  double finish_within = 0.0;
   double duration_noise = 0.0; ///< relative per-cell jitter of the burn duration
   // Direction-dependent spread (beyond the paper; 0 keeps eq 1 symmetric).
   double climb = 0.0;          ///< drive toward world-up along the sheet, |e| per unit slope
@@ -186,8 +189,31 @@ class Simulation {
   void apply_maps(const RowMatX3i& faces, const CellMaps& maps);
   std::vector<int> scan_cells_near(const Eigen::Vector3d& point, double radius, double* nearest_distance, int* nearest) const;
 
+  // The pace of a burn timed by finish_within: the rest-shape arrival times tau (slope factor
+  // and drive off, scale 1) from the sources so far, and the feedback on how fast the fire
+  // really covers them.
+  struct Pace {
+    std::vector<int> sources;    // cells lit by ignite calls, ascending
+    bool stale = false;          // sources changed since tau was solved
+    double t0 = -1.0;            // the first ignition, s (< 0: none yet)
+    std::vector<double> tau;     // per cell, s; inf where the fire cannot reach
+    std::vector<int> order;      // reachable cells by tau
+    std::vector<double> cum;     // their areas, summed in that order
+    double window = 0.0;         // s from t0 by which the last cell must ignite
+    double covered = 0.0;        // tau covered, decayed over the feedback's window
+    double scaled = 0.0;         // seconds of speed scale spent, decayed alike
+    double prev_tau = 0.0, prev_dt = 0.0;
+    bool has_prev = false;       // false: the next step sets the scale outright
+  };
+  void note_sources(const std::vector<int>& lit, double t0);
+  void replan();
+  double tau_covered() const;
+  void pace_step(double dt);
+
   SimulationParams params_;
   RowMatX3 vertices_;
+  Pace pace_;
+  std::unique_ptr<FireCells> plan_cells_;  // pristine cells for the pace's solves
   RowMatX3i faces_;
   double speed_scale_ = 1.0;
   std::unique_ptr<FireCells> cells_;

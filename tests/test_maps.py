@@ -140,3 +140,72 @@ def test_ignite_near_lights_cells_within_radius_of_points(square, geometry):
     assert lit == np.count_nonzero(t == 0.0)
     assert (t[inside & (dx < 0.010)] == 0.0).all()
     assert not (t[inside & (dx > 0.0115)] == 0.0).any()
+
+
+# --- finishing within a time (issue #14: "burn in N seconds") ------------------------------------
+def _finish_time(sim, limit, dt=1 / 24, each=None):
+    """When the fire has stopped: no cell burning, some burnt; each(sim) after every step."""
+    inside = sim.inside().astype(bool)
+    while sim.time < limit:
+        sim.step(dt)
+        if each is not None:
+            each(sim)
+        st = sim.cell_states()[inside]
+        if (st == 2).any() and not (st == 1).any():
+            return sim.time
+    return np.inf
+
+
+# Measured (frames of 1/24 s): a flat A4 sheet, 64 cells, finishes at 0.992, 0.992, 0.995 of
+# 5, 20, 60 s; the same sheet at 48 cells curling on a table with cv = 3 (eq 1 slows its fringe
+# to about 0.83 of V0, it lifts 6 cm) at 0.990 of 30 s; a lantern at 0.994 of 20 s; a sheet
+# stopped by a firebreak at 0.979 of 6 s. The issue asks for 10 %; the tests allow 0.96-1.02.
+def _a4():
+    from thinburn import demo
+    return demo.default_scene("paper")
+
+
+@pytest.mark.parametrize("target", [5.0, 20.0, 60.0])
+def test_finish_within_times_a_flat_sheet(target):
+    sc = _a4()
+    sim = thinburn.Simulation(sc.vertices, sc.faces, cells=64, shell=False, finish_within=target)
+    sim.ignite(sc.ignite_at, time=0.0, radius=sc.ignite_radius)
+    assert _finish_time(sim, 1.5 * target) / target == pytest.approx(0.99, abs=0.03)
+
+
+def test_finish_within_holds_while_the_sheet_curls():
+    sc = _a4()
+    sim = thinburn.Simulation(sc.vertices, sc.faces, cells=48, floor=sc.floor, finish_within=30.0, cv=3.0)
+    sim.ignite(sc.ignite_at, time=0.0, radius=sc.ignite_radius)
+    lift = []
+    assert _finish_time(sim, 45.0, each=lambda s: lift.append(s.vertex_positions()[:, 2].max())) / 30.0 \
+        == pytest.approx(0.99, abs=0.03)
+    assert max(lift) > 0.03  # it did curl (measured 7 cm at 64 cells)
+
+
+def test_finish_within_on_a_lantern():
+    from thinburn import demo
+    sc = demo.shell_scene("lantern")
+    sim = thinburn.Simulation(sc.vertices, sc.faces, cells=32, floor=sc.floor, finish_within=20.0)
+    sim.ignite(sc.ignite_at, time=0.0, radius=sc.ignite_radius)
+    assert _finish_time(sim, 30.0) / 20.0 == pytest.approx(0.99, abs=0.03)
+
+
+def test_finish_within_stops_at_a_firebreak_and_cuts_long_burns(square):
+    v, f, x = square
+    sim = thinburn.Simulation(v, f, cells=40, shell=False, finish_within=6.0,
+                              speed_map=np.where(np.abs(x - 0.1) < 0.003, 0.0, 1.0))
+    # The material's 4 s a cell is cut to half the target, the rest is for the spread.
+    assert sim.burn_durations().max() == pytest.approx(3.0, rel=1e-12)
+    sim.ignite(v[np.argmin(x)], time=1.0, radius=0.01)  # the clock starts at the first ignition
+    end = _finish_time(sim, 12.0)
+    assert (end - 1.0) / 6.0 == pytest.approx(0.99, abs=0.03)
+    px, _ = _cells_x(sim, v)
+    assert not (sim.cell_states().ravel()[px > 0.11] > 0).any()
+
+
+@pytest.mark.parametrize("bad", [0.0, -1.0, np.nan, np.inf])
+def test_finish_within_refuses_bad_values(square, bad):
+    v, f, _ = square
+    with pytest.raises(ValueError, match="finish_within"):
+        thinburn.Simulation(v, f, cells=16, shell=False, finish_within=bad)

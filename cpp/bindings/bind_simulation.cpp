@@ -83,6 +83,7 @@ void define_params(py::module_& m) {
       .def_readwrite("speed_noise", &SimulationParams::speed_noise)
       .def_readwrite("burn_duration", &SimulationParams::burn_duration)
       .def_readwrite("duration_noise", &SimulationParams::duration_noise)
+      .def_readwrite("finish_within", &SimulationParams::finish_within)
       .def_readwrite("climb", &SimulationParams::climb)
       .def_readwrite("wind_spread", &SimulationParams::wind_spread)
       .def_readwrite("max_drive", &SimulationParams::max_drive)

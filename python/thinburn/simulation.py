@@ -101,6 +101,10 @@ class Simulation:
         paper's eqs 13-15); explicit ones substep as stability needs or raise.
     shell : False switches the paper's §4 off: no lattice, particles or motion; the sheet keeps
         its rest shape and only the fire runs.
+    finish_within : None (the material's speed) or seconds > 0: every cell the fire can reach
+        has burnt out that long after the first ignition, whatever the curl does. The speed is
+        scaled every step by feedback (``speed_scale`` then reads it), and a cell burns at most
+        half that time (docs/fire_front.md, "Finishing within a time").
     speed_map : None or (n,) values >= 0, one per vertex: painted spread speed, multiplying
         eq 1's V0 where the fire is (2: twice as fast, 0: a firebreak that never burns).
     fuel_map : None or (n,) values >= 0, one per vertex: painted fuel, multiplying how long a
@@ -141,7 +145,7 @@ class Simulation:
     def __init__(self, vertices, faces, uv=None, material="paper", cells=128, seed=0,
                  threads=None, front="fmm", lattice=None, pinned=None, floor=None,
                  integrator="implicit", shell=True, geometry="auto", speed_map=None, fuel_map=None,
-                 **params):
+                 finish_within=None, **params):
         verts = V.real_array(vertices, "vertices", (-1, 3))
         if len(verts) < 3:
             raise ValueError(f"vertices: an empty mesh (need >= 3 vertices, got {len(verts)})")
@@ -156,6 +160,8 @@ class Simulation:
                          V.integer(seed, "seed", low=0, high=2**63 - 1),
                          V.choice(front, "front", FRONT_METHODS), params)
         p.geometry = V.choice(geometry, "geometry", GEOMETRIES)
+        if finish_within is not None:
+            p.finish_within = V.real(finish_within, "finish_within", low=0.0, low_open=True)
         if p.geometry == "auto" and front in ("cellular", "cellular16"):
             p.geometry = "plane"  # the paper's rule is defined on the grid
         if not isinstance(shell, (bool, np.bool_)):
