@@ -186,6 +186,8 @@ class BakeJob:
             if not core_supports("pinned"):
                 raise BakeError("this thinburn core cannot pin vertices yet: clear the Pin Group")
             kwargs["pinned"] = inputs.pin_mask(obj, settings.pin_group)
+        if settings.burn_duration > 0:
+            kwargs["finish_within"] = float(settings.burn_duration)
         for key in ("speed_map", "fuel_map"):
             values = inputs.vertex_map(obj, settings, key)
             if values is not None:
