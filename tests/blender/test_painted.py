@@ -185,3 +185,49 @@ def test_burn_duration_times_the_whole_burn(addon, tmp_path, target, crumple):
     taken = (burnout.max() - ignite.min()) / fps
     # Measured 0.983 (1.5 s, moving) and 0.982 (3 s, fire only) of the target.
     assert taken / target == pytest.approx(0.99, abs=0.04)
+
+
+def test_cycles_render_shows_the_firebreak(addon, tmp_path):
+    """A 160x120 Cycles frame (4 samples) of a sheet with a painted firebreak down its middle:
+    char on the lit half, the far half as clean as before the fire."""
+    sheet = make_sheet(n=41, size=0.2, z=0.0)
+    s = setup_bake(sheet, frames=60, cells=48, cache_dir=tmp_path / "cache")
+    s.crumple = False  # the shading is the point: keep the sheet flat in the camera
+    s.burnt = "ASH"    # burnt-out parts stay as black char
+    s.mat_V0, s.mat_burn_duration, s.mat_duration_noise = FAST, 0.5, 0.0
+    x = _x(sheet)
+    _group(sheet, "speed", np.where(np.abs(x) < 0.003, 0.0, 1.0))
+    s.speed_map = "speed"
+    _corner_igniter(sheet)
+    assert bpy.ops.thinburn.bake() == {"FINISHED"}
+    scene = bpy.context.scene
+    cam = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
+    cam.data.type, cam.data.ortho_scale, cam.location = "ORTHO", 0.2, (0.0, 0.0, 2.0)
+    scene.collection.objects.link(cam)
+    scene.camera = cam
+    sun = bpy.data.objects.new("Sun", bpy.data.lights.new("Sun", "SUN"))
+    sun.data.energy = 3.0
+    scene.collection.objects.link(sun)
+    scene.world = bpy.data.worlds.new("World")
+    r = scene.render
+    r.engine, r.resolution_x, r.resolution_y, r.resolution_percentage = "CYCLES", 160, 120, 100
+    r.image_settings.file_format = "PNG"
+    scene.view_settings.view_transform = "Standard"
+    scene.cycles.device, scene.cycles.samples, scene.cycles.use_denoising = "CPU", 4, False
+
+    def luminance(name, frame):
+        scene.frame_set(frame)
+        r.filepath = str(tmp_path / name)
+        bpy.ops.render.render(write_still=True)
+        img = bpy.data.images.load(r.filepath)
+        px = np.array(img.pixels[:], dtype=np.float32).reshape(img.size[1], img.size[0], 4)[::-1, :, :3]
+        bpy.data.images.remove(img)
+        return px @ np.array([0.2126, 0.7152, 0.0722], dtype=np.float32)
+
+    before, after = luminance("before.png", 1), luminance("after.png", 60)
+    lit_half = (slice(30, 90), slice(20, 60))   # x < -0.025 m (the camera sees 0.2 m in 160 px)
+    far_half = (slice(30, 90), slice(100, 140))  # x > 0.025 m, behind the firebreak
+    # Measured: the lit half 0.911 -> 0.196 (black char), the far half 0.911 -> 0.911 (pictures
+    # in tmp_path: before.png, after.png).
+    assert after[lit_half].mean() < 0.3 * before[lit_half].mean(), tmp_path
+    assert after[far_half].mean() == pytest.approx(before[far_half].mean(), rel=0.01), tmp_path
