@@ -186,6 +186,11 @@ class BakeJob:
             if not core_supports("pinned"):
                 raise BakeError("this thinburn core cannot pin vertices yet: clear the Pin Group")
             kwargs["pinned"] = inputs.pin_mask(obj, settings.pin_group)
+        if settings.heat_ignites:
+            if not self.shell:
+                raise BakeError("Heat Ignites needs Crumple on (the heat comes from the fire's "
+                                "particles): tick Crumple, or untick Heat Ignites")
+            kwargs["heat_ignites"] = True
         if settings.burn_duration > 0:
             kwargs["finish_within"] = float(settings.burn_duration)
         for key in ("speed_map", "fuel_map"):

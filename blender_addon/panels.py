@@ -44,6 +44,9 @@ class PHYSICS_PT_thinburn(ThinBurnPhysicsPanel, bpy.types.Panel):
         row.active = settings.crumple and job.core_supports("lattice")
         row.prop(settings, "lattice")
         layout.prop(settings, "crumple")
+        row = layout.row()
+        row.active = settings.crumple
+        row.prop(settings, "heat_ignites")
         layout.prop(settings, "burn_duration")
         layout.prop(settings, "igniter_collection")
         layout.prop(settings, "wind_scale")

@@ -200,6 +200,12 @@ class ThinBurnSettings(bpy.types.PropertyGroup):
                     "has stopped at a firebreak), whatever the sheet's curl does: the bake speeds "
                     "the fire up or slows it down to fit. 0: the material's own speed")
 
+    heat_ignites: BoolProperty(
+        name="Heat Ignites", default=False, options=STATIC,
+        description="Parts of this mesh that are not yet burning catch fire when the flames' heat "
+                    "(eq. 2, at each fire cell) passes the material's ignition temperature: fire "
+                    "jumps gaps and climbs a stack of sheets made as one mesh. Needs Crumple")
+
     igniter_collection: PointerProperty(
         name="Igniters", type=bpy.types.Collection, options=STATIC,
         description="Objects in this collection light the sheet while their ThinBurn Igniter "

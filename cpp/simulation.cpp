@@ -1,5 +1,7 @@
 #include "simulation.hpp"
 
+#include "heat.hpp"
+
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 
@@ -76,6 +78,12 @@ Simulation::Simulation(const RowMatX3& vertices, const RowMatX3i& faces, const R
       shell_ = std::make_unique<Shell>(surface_->surface(), vertices, faces, shell_params(), mass_, pinned);
   }
   build_locator();
+  if (params.ignition_temperature > 0) {
+    if (!std::isfinite(params.ignition_temperature) || !(params.ignition_gain > 0) || !(params.heat_loss >= 0))
+      throw std::invalid_argument("heat ignition: ignition_temperature must be finite, ignition_gain > 0 and heat_loss >= 0");
+    cell_temp_.assign(nc, 0.0);
+    find_pieces();
+  }
   if (params.finish_within > 0) {
     if (!std::isfinite(params.finish_within)) throw std::invalid_argument("finish_within must be finite");
     plan_cells_ = cells_->clone();
@@ -86,6 +94,71 @@ Simulation::Simulation(const RowMatX3& vertices, const RowMatX3i& faces, const R
     const double cut = longest > 0 ? std::min(1.0, 0.5 * params.finish_within / longest) : 1.0;
     for (double& d : duration_) d *= cut;
   }
+}
+
+void Simulation::find_pieces() {
+  // Connected pieces of the cells (8-neighbours on the grid, the cell graph on a surface).
+  const int nc = cells_->size();
+  piece_.assign(nc, -1);
+  const auto& in = cells_->inside();
+  std::vector<int> stack;
+  int pieces = 0;
+  for (int seed = 0; seed < nc; ++seed) {
+    if (!in[seed] || piece_[seed] >= 0) continue;
+    piece_[seed] = pieces;
+    stack.assign(1, seed);
+    while (!stack.empty()) {
+      const int c = stack.back();
+      stack.pop_back();
+      auto visit = [&](int n) {
+        if (in[n] && piece_[n] < 0) {
+          piece_[n] = pieces;
+          stack.push_back(n);
+        }
+      };
+      if (grid_) {
+        const int N = grid_->sheet().cells(), r = c / N, col = c % N;
+        for (int dr = -1; dr <= 1; ++dr)
+          for (int dc = -1; dc <= 1; ++dc)
+            if ((dr || dc) && r + dr >= 0 && r + dr < N && col + dc >= 0 && col + dc < N) visit((r + dr) * N + col + dc);
+      } else {
+        const SurfaceCells& sc = surface_->surface();
+        for (int q = sc.nbr_offset()[c]; q < sc.nbr_offset()[c + 1]; ++q) visit(sc.nbr_index()[q]);
+      }
+    }
+    ++pieces;
+  }
+  piece_alight_.assign(pieces, 0);
+}
+
+void Simulation::heat_ignite(double dt) {
+  // Eq 2 at the cells where they are now, with the ignition's own Ct: the particles' heat,
+  // less Newton cooling. A cell catches fire at the threshold, but only on a piece not yet
+  // alight: there eq 1's front is the fire, and heat lighting cells ahead of it would change
+  // the paper's spread; across a gap (another sheet, a stack) heat is the only way over.
+  if (!(params_.ignition_temperature > 0) || !shell_) return;
+  const ParticleSystem& ps = shell_->particles();
+  const RowMatX3 where = cell_positions();
+  const double keep = std::exp(-params_.heat_loss * dt);
+  for (double& t : cell_temp_) t *= keep;
+  if (ps.positions().rows() > 0) {
+    Eigen::VectorXd gain;
+    KernelSumOptions o;
+    o.power = 2;
+    o.d_min = params_.bending.d_min;
+    o.method = params_.bending.fast ? SumMethod::Fast : SumMethod::Direct;
+    o.tolerance = params_.bending.tolerance;
+    particle_heat(RowMatX3(ps.positions()), Eigen::VectorXd(ps.temperatures()), where, params_.ignition_gain, dt, o,
+                  gain);
+    for (int c = 0; c < cells_->size(); ++c) cell_temp_[c] += gain[c];
+  }
+  for (int c : burning_) piece_alight_[piece_[c]] = 1;
+  std::vector<int> hot;
+  for (int c = 0; c < cells_->size(); ++c)
+    if (cells_->inside()[c] && state_[c] == kUnburnt && !piece_alight_[piece_[c]] &&
+        cell_temp_[c] >= params_.ignition_temperature)
+      hot.push_back(c);
+  if (!hot.empty()) ignite_cells(hot, time_);
 }
 
 void Simulation::note_sources(const std::vector<int>& lit, double t0) {
@@ -444,6 +517,8 @@ struct Simulation::Saved {
   Shell::Checkpoint shell;
   Pace pace;
   double speed_scale;
+  std::vector<double> cell_temp;
+  std::vector<std::uint8_t> piece_alight;
 };
 
 bool Simulation::step_may_throw() const {
@@ -453,7 +528,7 @@ bool Simulation::step_may_throw() const {
 }
 
 Simulation::Saved Simulation::save() const {
-  return Saved{time_, cells_->clone(), state_, burning_, mass_, shell_->checkpoint(), pace_, speed_scale_};
+  return Saved{time_, cells_->clone(), state_, burning_, mass_, shell_->checkpoint(), pace_, speed_scale_, cell_temp_, piece_alight_};
 }
 
 void Simulation::restore(Saved&& s) {
@@ -466,6 +541,8 @@ void Simulation::restore(Saved&& s) {
   shell_->rollback(std::move(s.shell));
   pace_ = std::move(s.pace);
   speed_scale_ = s.speed_scale;
+  cell_temp_ = std::move(s.cell_temp);
+  piece_alight_ = std::move(s.piece_alight);
   locator_stale_ = true;
 }
 
@@ -494,6 +571,7 @@ void Simulation::step_unguarded(double dt) {
   retire_burnt();
   if (shell_) step_shell(dt);
   locator_stale_ = shell_ != nullptr;
+  heat_ignite(dt);
 }
 
 void Simulation::retire_burnt() {

@@ -44,6 +44,10 @@ struct SimulationParams {
   /// s from the first ignition until every cell the fire can reach has burnt out; 0: off, the
   /// material's speed (docs/fire_front.md, "Finishing within a time").
   double finish_within = 0.0;
+  // Heat ignites (eq 2 at the cells; docs/heat.md, "Heat ignites"). 0: off.
+  double ignition_temperature = 0.0;  ///< K above ambient at which an unburnt cell catches fire
+  double ignition_gain = 0.0;         ///< eq 2's Ct for the cells' temperature, m^2/s
+  double heat_loss = 0.3;             ///< 1/s, the cells' cooling (Newton's law)
   double duration_noise = 0.0; ///< relative per-cell jitter of the burn duration
   // Direction-dependent spread (beyond the paper; 0 keeps eq 1 symmetric).
   double climb = 0.0;          ///< drive toward world-up along the sheet, |e| per unit slope
@@ -125,6 +129,11 @@ class Simulation {
   /// @brief Fringe cells (paper §3.1): burning cells with a neighbour neither burning nor burnt.
   std::vector<int> fringe() const;
   void fringe_into(std::vector<int>& out) const;
+  /// @brief Per cell, its temperature above ambient from the fire particles (eq 2 with
+  /// ignition_gain, cooling at heat_loss), K; empty when heat ignition is off.
+  const std::vector<double>& cell_temperature() const { return cell_temp_; }
+  /// @brief Per cell, its connected piece of the sheet (heat ignition only; else empty).
+  const std::vector<int>& cell_pieces() const { return piece_; }
   /// @brief 1 where a cell can never burn (a painted 0 in the speed or fuel map).
   bool is_firebreak(int cell) const { return v_scale_[cell] == 0.0; }
   /// @brief Char per cell in [0, 1]: 0 before ignition, rising over the burn, 1 when burnt.
@@ -206,6 +215,11 @@ class Simulation {
     bool has_prev = false;       // false: the next step sets the scale outright
   };
   void note_sources(const std::vector<int>& lit, double t0);
+  void find_pieces();
+  void heat_ignite(double dt);
+  std::vector<double> cell_temp_;
+  std::vector<int> piece_;
+  std::vector<std::uint8_t> piece_alight_;
   void replan();
   double tau_covered() const;
   void pace_step(double dt);

@@ -84,6 +84,9 @@ void define_params(py::module_& m) {
       .def_readwrite("burn_duration", &SimulationParams::burn_duration)
       .def_readwrite("duration_noise", &SimulationParams::duration_noise)
       .def_readwrite("finish_within", &SimulationParams::finish_within)
+      .def_readwrite("ignition_temperature", &SimulationParams::ignition_temperature)
+      .def_readwrite("ignition_gain", &SimulationParams::ignition_gain)
+      .def_readwrite("heat_loss", &SimulationParams::heat_loss)
       .def_readwrite("climb", &SimulationParams::climb)
       .def_readwrite("wind_spread", &SimulationParams::wind_spread)
       .def_readwrite("max_drive", &SimulationParams::max_drive)
@@ -152,6 +155,7 @@ void define_simulation(py::module_& m) {
       .def_property_readonly("area", [](const S& s) { return s.fire_cells().total_area(); })
       .def("inside", [](const S& s) { return per_cell(s, s.fire_cells().inside()); })
       .def("cell_states", [](const S& s) { return per_cell(s, s.cell_states()); })
+      .def("cell_temperature", [](const S& s) { return per_cell(s, s.cell_temperature().empty() ? std::vector<double>(s.num_cells(), 0.0) : s.cell_temperature()); })
       .def("firebreaks", [](const S& s) {
         std::vector<std::uint8_t> b(s.num_cells());
         for (int c = 0; c < s.num_cells(); ++c) b[c] = s.is_firebreak(c);

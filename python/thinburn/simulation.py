@@ -8,7 +8,7 @@ import numpy as np
 from . import _core
 from . import _validate as V
 from ._threads import resolve_threads
-from .materials import Material, resolve_material
+from .materials import IGNITION_TEMPERATURE, Material, resolve_material
 
 FRONT_METHODS = ("cellular", "cellular16", "fmm1", "fmm")
 
@@ -61,7 +61,15 @@ _PARAM_BOUNDS = {
     "max_drive": dict(low=0.0, high=0.95),
     "ash_fraction": dict(low=0.0, high=1.0),
     "ash_strength": dict(low=0.0, high=1.0),
+    "ignition_gain": dict(low=0.0, low_open=True),
+    "heat_loss": dict(low=0.0),
 }
+# Eq 2's Ct for the cells' temperature when heat ignites, m²/s (docs/heat.md, "Heat ignites"):
+# calibrated on two 15 cm paper sheets, the lower lit at its centre (scripts/heat_ignition.py,
+# 32 cells): the upper one catches fire 1.4 s later 1 cm above it, 2.4 s later 3 cm above, not
+# in 8 s 10 cm above (182 K at most), and 50 cm above it warms by 2.4 K. The particles' heat
+# scales with their birth rate (docs/heat.md): change this with particle_birth_rate.
+IGNITION_GAIN = 2e-4
 
 
 class Simulation:
@@ -105,6 +113,11 @@ class Simulation:
         has burnt out that long after the first ignition, whatever the curl does. The speed is
         scaled every step by feedback (``speed_scale`` then reads it), and a cell burns at most
         half that time (docs/fire_front.md, "Finishing within a time").
+    heat_ignites : True: an unburnt cell whose temperature from the fire particles (eq 2 at
+        the cells, with ``ignition_gain``, cooling at ``heat_loss`` per second) passes its
+        material's ignition temperature (``thinburn.materials.IGNITION_TEMPERATURE``) catches
+        fire, on a piece of the mesh not yet alight: fire jumps gaps and climbs stacks of
+        sheets given as one mesh. Needs shell=True. ``cell_temperature()`` reads it.
     speed_map : None or (n,) values >= 0, one per vertex: painted spread speed, multiplying
         eq 1's V0 where the fire is (2: twice as fast, 0: a firebreak that never burns).
     fuel_map : None or (n,) values >= 0, one per vertex: painted fuel, multiplying how long a
@@ -145,7 +158,7 @@ class Simulation:
     def __init__(self, vertices, faces, uv=None, material="paper", cells=128, seed=0,
                  threads=None, front="fmm", lattice=None, pinned=None, floor=None,
                  integrator="implicit", shell=True, geometry="auto", speed_map=None, fuel_map=None,
-                 finish_within=None, **params):
+                 finish_within=None, heat_ignites=False, **params):
         verts = V.real_array(vertices, "vertices", (-1, 3))
         if len(verts) < 3:
             raise ValueError(f"vertices: an empty mesh (need >= 3 vertices, got {len(verts)})")
@@ -160,6 +173,15 @@ class Simulation:
                          V.integer(seed, "seed", low=0, high=2**63 - 1),
                          V.choice(front, "front", FRONT_METHODS), params)
         p.geometry = V.choice(geometry, "geometry", GEOMETRIES)
+        if not isinstance(heat_ignites, (bool, np.bool_)):
+            raise TypeError(f"heat_ignites must be a bool, got {type(heat_ignites).__name__}")
+        if heat_ignites:
+            if not shell:
+                raise ValueError("heat_ignites: the heat comes from the fire particles, which need "
+                                 "shell=True")
+            p.ignition_temperature = IGNITION_TEMPERATURE.get(self.material.name, IGNITION_TEMPERATURE["paper"])
+            if p.ignition_gain == 0.0:
+                p.ignition_gain = IGNITION_GAIN
         if finish_within is not None:
             p.finish_within = V.real(finish_within, "finish_within", low=0.0, low_open=True)
         if p.geometry == "auto" and front in ("cellular", "cellular16"):
@@ -477,6 +499,10 @@ class Simulation:
     def inside(self) -> np.ndarray:
         """(N, N) uint8: 1 where the cell is part of the sheet."""
         return self._sim.inside()
+
+    def cell_temperature(self) -> np.ndarray:
+        """Per cell, K above ambient from the fire particles (heat_ignites; zeros otherwise)."""
+        return self._sim.cell_temperature()
 
     def firebreaks(self) -> np.ndarray:
         """(N, N) bool, (num_cells,) on a surface: cells that never burn (a painted 0 in

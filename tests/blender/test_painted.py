@@ -231,3 +231,31 @@ def test_cycles_render_shows_the_firebreak(addon, tmp_path):
     # in tmp_path: before.png, after.png).
     assert after[lit_half].mean() < 0.3 * before[lit_half].mean(), tmp_path
     assert after[far_half].mean() == pytest.approx(before[far_half].mean(), rel=0.01), tmp_path
+
+
+@pytest.mark.parametrize("heat", [True, False])
+def test_heat_ignites_climbs_a_stack(addon, tmp_path, heat):
+    """Two 15 cm paper sheets 1 cm apart in one mesh, the upper one pinned: lit at the lower
+    one's centre, the heat lights the upper one (Heat Ignites), or nothing crosses the gap."""
+    from blender_helpers import make_stack
+    sheet = make_stack(name="Sheet", size=0.15, gap=0.01, sheets=2, n=17, shift=0.0)
+    s = setup_bake(sheet, frames=60, cells=24, cache_dir=tmp_path / "cache")
+    z = np.array([v.co.z for v in sheet.data.vertices])
+    pins = sheet.vertex_groups.new(name="pins")
+    pins.add([int(i) for i in np.flatnonzero(z > 0.005)], 1.0, "REPLACE")
+    s.pin_group = "pins"
+    s.heat_ignites = heat
+    coll = bpy.data.collections.new("Igniters")
+    bpy.context.scene.collection.children.link(coll)
+    s.igniter_collection = coll
+    empty = bpy.data.objects.new("Igniter", None)
+    coll.objects.link(empty)
+    empty.thinburn_igniter.radius = 0.008  # the lower sheet only (the upper is 1 cm away)
+    assert bpy.ops.thinburn.bake() == {"FINISHED"}
+    ignite = point_attribute(sheet, "thinburn_ignite_time")
+    upper_lit = ignite[z > 0.005] < addon.cache.NEVER_FRAME
+    if heat:
+        # Measured: the upper sheet's first vertex lights at frame 30 (the core alone: 1.29 s).
+        assert upper_lit.any() and ignite[z > 0.005].min() < 1 + 2.5 * 24
+    else:
+        assert not upper_lit.any()
