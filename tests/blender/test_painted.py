@@ -259,3 +259,21 @@ def test_heat_ignites_climbs_a_stack(addon, tmp_path, heat):
         assert upper_lit.any() and ignite[z > 0.005].min() < 1 + 2.5 * 24
     else:
         assert not upper_lit.any()
+
+
+@pytest.mark.parametrize("source", ["GROUP", "ATTRIBUTE"])
+def test_painted_panel_draws_its_maps(addon, source):
+    from test_addon import _Context, _Layout
+    sheet = make_sheet()
+    s = sheet.thinburn
+    s.enabled = True
+    for key in ("speed_map", "fuel_map", "ignite_map"):
+        setattr(s, key + "_from", source)
+    drawn = []
+    panel = addon.panels.PHYSICS_PT_thinburn_painted
+    assert panel.poll(_Context(sheet))
+    panel.draw(type("P", (), {"layout": _Layout(drawn)})(), _Context(sheet))
+    addon.panels.PHYSICS_PT_thinburn.draw(type("P", (), {"layout": _Layout(drawn)})(), _Context(sheet))
+    for name in ("speed_map", "speed_map_from", "fuel_map", "fuel_map_from", "ignite_map",
+                 "ignite_map_from", "ignite_frame", "burn_duration", "heat_ignites"):
+        assert name in drawn, name
