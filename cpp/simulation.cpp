@@ -161,6 +161,17 @@ void Simulation::heat_ignite(double dt) {
   if (!hot.empty()) ignite_cells(hot, time_);
 }
 
+void Simulation::set_fire_sources(const RowMatX3& points, const Eigen::VectorXd& lengths) {
+  if (!shell_) throw std::invalid_argument("fire sources: their flames are fire particles, which need shell=True");
+  if (points.rows() != lengths.size())
+    throw std::invalid_argument("fire sources: one length per point expected (" + std::to_string(points.rows()) +
+                                " points, " + std::to_string(lengths.size()) + " lengths)");
+  if (!points.allFinite() || !lengths.allFinite() || (lengths.array() < 0).any())
+    throw std::invalid_argument("fire sources: points must be finite and lengths finite and >= 0");
+  source_pos_ = points;
+  source_len_ = lengths;
+}
+
 void Simulation::note_sources(const std::vector<int>& lit, double t0) {
   if (!plan_cells_ || lit.empty()) return;
   if (pace_.t0 < 0 || t0 < pace_.t0) pace_.t0 = t0;
@@ -686,12 +697,20 @@ void Simulation::gather_shell_sources() {
   // (eq 3): the burning cells, on their flame face.
   fringe_into(fringe_buf_);
   const Eigen::Index k = static_cast<Eigen::Index>(fringe_buf_.size());
-  emit_pos_.resize(k, 3);
-  emit_normal_.resize(k, 3);
-  emit_len_.setConstant(k, cells_->spacing());
+  // The fire sources (a candle) after the fringe, so the fringe's emitters keep their numbers
+  // (their random draws) and a simulation without sources is unchanged.
+  const Eigen::Index ks = source_pos_.rows();
+  emit_pos_.resize(k + ks, 3);
+  emit_normal_.resize(k + ks, 3);
+  emit_len_.setConstant(k + ks, cells_->spacing());
   for (Eigen::Index e = 0; e < k; ++e) {
     emit_pos_.row(e) = cell_position(fringe_buf_[e]).transpose();
     emit_normal_.row(e) = cell_normal(fringe_buf_[e]).transpose();
+  }
+  for (Eigen::Index e = 0; e < ks; ++e) {
+    emit_pos_.row(k + e) = source_pos_.row(e);
+    emit_normal_.row(k + e) = Eigen::RowVector3d::UnitZ();  // a flame burns upward
+    emit_len_[k + e] = source_len_[e];
   }
   const double half = 0.5 * shell_->thickness();
   ignition_pts_.resize(static_cast<Eigen::Index>(burning_.size()), 3);

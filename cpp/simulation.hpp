@@ -129,6 +129,11 @@ class Simulation {
   /// @brief Fringe cells (paper §3.1): burning cells with a neighbour neither burning nor burnt.
   std::vector<int> fringe() const;
   void fringe_into(std::vector<int>& out) const;
+  /// @brief Flames that burn on their own (a candle): each point emits fire particles as a
+  /// burning front of that length would (upward), every step until replaced; empty: none.
+  /// Needs the shell (its particles). Their heat bends the sheet (eq 2) and, with heat
+  /// ignition, lights it.
+  void set_fire_sources(const RowMatX3& points, const Eigen::VectorXd& lengths);
   /// @brief Per cell, its temperature above ambient from the fire particles (eq 2 with
   /// ignition_gain, cooling at heat_loss), K; empty when heat ignition is off.
   const std::vector<double>& cell_temperature() const { return cell_temp_; }
@@ -217,6 +222,8 @@ class Simulation {
   void note_sources(const std::vector<int>& lit, double t0);
   void find_pieces();
   void heat_ignite(double dt);
+  RowMatX3 source_pos_;
+  Eigen::VectorXd source_len_;
   std::vector<double> cell_temp_;
   std::vector<int> piece_;
   std::vector<std::uint8_t> piece_alight_;

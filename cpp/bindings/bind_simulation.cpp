@@ -126,6 +126,7 @@ void define_simulation(py::module_& m) {
            py::call_guard<py::gil_scoped_release>())
       .def("ignite_near", &S::ignite_near, py::arg("points"), py::arg("radius"), py::arg("time"),
            py::call_guard<py::gil_scoped_release>())
+      .def("set_fire_sources", &S::set_fire_sources, py::arg("points"), py::arg("lengths"))
       .def("vertex_field", &S::vertex_field, py::arg("values"), py::call_guard<py::gil_scoped_release>())
       .def_property("speed_scale", &S::speed_scale, &S::set_speed_scale)
       .def("cells_near", &S::cells_near, py::arg("point"), py::arg("radius"),

@@ -296,6 +296,19 @@ class Simulation:
         t = self.time if time is None else V.real(time, "time", low=0.0)
         return self._sim.ignite_near(pts, r, t)
 
+    def set_fire_sources(self, points, widths) -> None:
+        """Flames that burn on their own (a candle, a burner): each point (k, 3) emits fire
+        particles upward as a burning front ``widths`` (k,) metres long would, every step from
+        now until replaced (``set_fire_sources(np.zeros((0, 3)), [])`` puts them out). Their
+        heat bends the sheet (eq 2) and, with ``heat_ignites``, lights it. Needs shell=True."""
+        pts = V.real_array(points, "points", (-1, 3))
+        w = V.real_array(widths, "widths", (len(pts),))
+        if (w < 0).any():
+            raise ValueError("widths must be >= 0 (m of flame front per point)")
+        if not self._sim.has_shell:
+            raise ValueError("set_fire_sources: flames are fire particles, which need shell=True")
+        self._sim.set_fire_sources(pts, w)
+
     @property
     def speed_scale(self) -> float:
         """Multiplies every cell's spread speed from now on (1: the material's); > 0."""
