@@ -25,6 +25,7 @@ class FrameSample:
     wind: tuple
     dynamics: dict  # the keyframeable motion parameters and the scene's gravity
     surfaces: list = None  # each lit mesh igniter's (surface points (k, 3), radius)
+    flames: list = None    # each lit Flame igniter's (position (3,), flame width m)
 
 
 def sheet_geometry(obj):
@@ -97,6 +98,11 @@ def floor_height(scene, settings):
                             "(or whatever the sheet lies on), or set Floor to Height")
         return object_top(settings.floor_object) + FLOOR_CLEARANCE
     return None
+
+
+def flame_igniters(igniters: list) -> list:
+    """The igniters (names) that are Flames: they burn on their own."""
+    return [n for n in igniters if bpy.data.objects[n].thinburn_igniter.kind == "FLAME"]
 
 
 def igniter_objects(obj, settings) -> list:
@@ -295,10 +301,14 @@ def sample_frame(scene, frame: int, sheet_name: str, igniters: list, winds: list
     for name in (sheet_name, *igniters, *winds):
         if objects.get(name) is None:
             raise BakeError(f"'{name}' was deleted or renamed during the bake")
-    samples, surfaces = [], []
+    samples, surfaces, flames = [], [], []
     for name in igniters:
         ob = objects[name]
         ig = ob.thinburn_igniter
+        if ig.kind == "FLAME":  # burns on its own: fire particles from its origin while lit
+            if ig.strength > 0.0:
+                flames.append((np.array(ob.matrix_world.translation, dtype=np.float64), 2.0 * float(ig.radius)))
+            continue
         if ob.type == "MESH":  # its surface lights the cells within its radius while lit
             if ig.strength > 0.0:
                 surfaces.append((surface_points(ob, spacing), float(ig.radius)))
@@ -315,7 +325,7 @@ def sample_frame(scene, frame: int, sheet_name: str, igniters: list, winds: list
     settings = objects[sheet_name].thinburn
     wind *= settings.wind_scale
     return FrameSample(frame, samples, tuple(float(w) for w in wind), dynamics(scene, settings),
-                       surfaces)
+                       surfaces, flames)
 
 
 def dynamics(scene, settings) -> dict:

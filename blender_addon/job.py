@@ -116,6 +116,7 @@ class BakeJob:
         self.dt = 1.0 / self.fps
         self.igniters = inputs.igniter_objects(obj, settings)
         self.winds = inputs.wind_objects(context.view_layer)
+        self.flames = inputs.flame_igniters(self.igniters)
         self.frame_restore = self.scene.frame_current
         # The sheet's rest state (its transform, the floor) is read at the first frame.
         self.scene.frame_set(self.frames[0])
@@ -154,6 +155,11 @@ class BakeJob:
         self.message = ""
         # What the bake ignores, in an artist's words (the report shows them).
         self.warnings = inputs.wind_warnings(context.view_layer)
+        if self.flames and not settings.heat_ignites:
+            self.warnings.append(
+                f"{', '.join(repr(n) for n in self.flames)} {'is a Flame' if len(self.flames) == 1 else 'are Flames'}: "
+                f"its heat bends '{obj.name}' but sets it alight only with Heat Ignites on "
+                "(Physics > ThinBurn)")
         if self.n_vertices < (settings.cells / 4) ** 2:
             # The char, the glow and the motion live on the vertices (the fire's cells do not
             # show between them), and the bake reads the mesh before its modifiers.
@@ -186,6 +192,10 @@ class BakeJob:
             if not core_supports("pinned"):
                 raise BakeError("this thinburn core cannot pin vertices yet: clear the Pin Group")
             kwargs["pinned"] = inputs.pin_mask(obj, settings.pin_group)
+        if self.flames and not self.shell:
+            raise BakeError(f"the Flame igniter {', '.join(repr(n) for n in self.flames)} burns as "
+                            "fire particles, which need Crumple on: tick Crumple, or set its Kind "
+                            "to Lights What It Touches")
         if settings.heat_ignites:
             if not self.shell:
                 raise BakeError("Heat Ignites needs Crumple on (the heat comes from the fire's "
@@ -285,9 +295,14 @@ class BakeJob:
         # A mesh igniter lights the cells within its radius of its surface (at least the
         # surface's sampling, half a cell, so that radius 0 still touches the sheet).
         surfaces = [(pts, max(radius, self.spacing), k * self.dt) for pts, radius in (here.surfaces or [])]
+        flames = None
+        if self.flames:  # every frame, so a Flame that goes out stops emitting
+            lit = here.flames or []
+            flames = (np.array([p for p, _ in lit], dtype=np.float64).reshape(-1, 3),
+                      np.array([w for _, w in lit], dtype=np.float64))
         painted = self.ignite_values if k == self.ignite_index else None
         return FrameTask(index=k, ignitions=ignitions, wind=here.wind, dynamics=changed,
-                         step=not last, surfaces=surfaces, painted=painted)
+                         step=not last, surfaces=surfaces, painted=painted, flames=flames)
 
     def _drain(self, block: bool) -> None:
         while not self.finished:

@@ -236,6 +236,7 @@ class OBJECT_PT_thinburn_igniter(bpy.types.Panel):
         layout = self.layout
         layout.use_property_split = True
         igniter = context.object.thinburn_igniter
+        layout.prop(igniter, "kind")
         layout.prop(igniter, "strength")
         layout.prop(igniter, "radius")
 

@@ -307,6 +307,14 @@ class ThinBurnIgniter(bpy.types.PropertyGroup):
         description="1 lights the sheet, 0 puts the igniter out (any value above 0 is lit; the "
                     "igniter's strength): cells within its radius catch fire at that frame. "
                     "Keyframe it to light the sheet at a chosen time")
+    kind: EnumProperty(
+        name="Kind", default="LIGHT", options=STATIC,
+        description="What the igniter does while Lit",
+        items=[("LIGHT", "Lights What It Touches", "Cells within its Radius catch fire (a match, "
+                 "a torch): of an Empty's origin, of a mesh's surface", 0),
+               ("FLAME", "Flame", "A flame that burns on its own (a candle, a burner): it emits fire "
+                "particles from its origin, a flame twice its Radius wide, whose heat bends the "
+                "sheet and, with the sheet's Heat Ignites, sets it alight", 1)])
     radius: FloatProperty(
         name="Radius", default=0.02, min=0.0, soft_max=1.0, subtype="DISTANCE", unit="LENGTH",
         description="Cells within this distance of the igniter catch fire: of an Empty's origin "

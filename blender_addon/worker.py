@@ -27,6 +27,7 @@ class FrameTask:
     step: bool = True               # False on the last frame
     surfaces: list = field(default_factory=list)  # mesh igniters: (points (k, 3), radius m, time s)
     painted: object = None          # (n,) Ignite map values to light at this frame's start
+    flames: object = None           # (points (k, 3), widths (k,)) of the lit Flames, or None
 
 
 def path_ignitions(start, end, t0: float, dt: float, spacing: float) -> list:
@@ -126,6 +127,8 @@ class CoreWorker(threading.Thread):
             pts, temps = sim.particles()
             particles = (np.array(pts, dtype=np.float32, copy=True),
                          np.array(temps, dtype=np.float32, copy=True))
+        if task.flames is not None:
+            sim.set_fire_sources(*task.flames)
         if task.step:
             sim.wind = task.wind
             if task.dynamics:
