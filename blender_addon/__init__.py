@@ -15,7 +15,7 @@ bl_info = {
     "category": "Physics",
 }
 
-_MODULES = ("properties", "operators", "quick", "panels", "usd_export", "scene_export")
+_MODULES = ("properties", "operators", "saving", "quick", "panels", "usd_export", "scene_export")
 
 
 def _modules():

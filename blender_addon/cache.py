@@ -101,6 +101,37 @@ class PC2Writer:
             self.abort()
 
 
+class ThinnedSamples:
+    """Every ``step``-th frame of a bake into a PC2Writer (the compact cache, *Keep Every*).
+
+    Frames 0, k, 2k, … are written as they come. When the last frame n is not one of them,
+    one more sample at the next multiple of k is written, chosen so that blending linearly
+    from the last whole sample reaches frame n's positions exactly at frame n (a readers'
+    frames past n are not played)."""
+
+    def __init__(self, writer: PC2Writer, step: int):
+        if int(step) < 1:
+            raise ValueError(f"Keep Every must be at least 1, got {step!r}")
+        self.writer, self.step = writer, int(step)
+        self._kept = None  # (index, positions) of the last sample written
+        self._latest = None
+
+    def add(self, index: int, positions) -> None:
+        positions = np.asarray(positions, dtype=np.float64)
+        if index % self.step == 0:
+            self.writer.append(positions)
+            self._kept = (index, positions)
+        self._latest = (index, positions)
+
+    def finish(self, last_index: int) -> None:
+        """After the last frame: the closing sample, if the last frame was not a kept one."""
+        if self._latest is None or self._kept is None or self._kept[0] == last_index:
+            return
+        k0, p0 = self._kept
+        r = (last_index - k0) / self.step  # in (0, 1): where frame n falls between samples
+        self.writer.append(p0 + (self._latest[1] - p0) / r)
+
+
 def read_pc2_header(path) -> dict:
     """The header of a PC2 file: version, points, start_frame, sample_rate, samples."""
     with open(path, "rb") as fh:

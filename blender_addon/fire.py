@@ -63,7 +63,7 @@ def _inputs(tree):
     interface_socket(tree, "Geometry", "OUTPUT", "NodeSocketGeometry")
 
 
-VERSION = 2  # of the groups and materials below; older ones (from an earlier add-on) are renamed
+VERSION = 3  # of the groups and materials below; older ones (from an earlier add-on) are renamed
 
 
 def _current(collection, name):
@@ -382,8 +382,9 @@ def _inputs_of(md):
 
 
 def sync_flame_settings(obj) -> None:
-    """Copy the sheet's flame settings onto its fire and light objects' modifiers."""
+    """Copy the sheet's flame settings onto its fire and light objects' modifiers (and lamps)."""
     settings = getattr(obj, "thinburn", None)
+    sync_lamps(obj)
     for name in (fire_object_name(obj), light_object_name(obj)):
         fire = bpy.data.objects.get(name)
         md = None if fire is None else fire.modifiers.get(FIRE_GROUP)
@@ -575,6 +576,7 @@ def apply_particles(obj, sheet_pc2_path: str, frames, frame_start: float) -> Non
                                         light_material())
     gn[ident["Count"]] = count
     apply_embers(obj, sheet_pc2_path, frames, frame_start)
+    apply_lamps(obj, frames, frame_start)
     light.visible_camera = False
     light.visible_glossy = False
     light.visible_transmission = False
@@ -583,26 +585,160 @@ def apply_particles(obj, sheet_pc2_path: str, frames, frame_start: float) -> Non
     sync_flame_settings(obj)
 
 
+# --- EEVEE's flame light -----------------------------------------------------------------------
+LAMPS = 4              # point lights per sheet, one per quarter of the fire around its centre
+LAMP_POWER = 0.0015    # W per unit of flame weight (T/T0)^4 at Intensity 1 (see docs/blender.md)
+LAMP_LIFT = 0.5        # of Flame Height: the lamps sit in the flames, above their particles
+LAMP_RADIUS = 0.02     # m: soft shadows, as from a flame's width
+
+
+def lamp_object_name(obj, k: int) -> str:
+    return f"ThinBurn Fire Lamp {k + 1} {obj.name}"
+
+
+def lamp_frames(frames, lift: float):
+    """Per frame, LAMPS (x, y, z, weight): the hot particles (Min Temperature and up) split into
+    LAMPS sectors of the XY plane around their weight centre, each sector's weight centre
+    ``lift`` above it and its weight sum(T/T0)^4. A lamp with no particle keeps its last place
+    at weight 0. Returns (frames, LAMPS, 4)."""
+    out = np.zeros((len(frames), LAMPS, 4))
+    for f, (pos, temp) in enumerate(frames):
+        pos = np.asarray(pos, dtype=np.float64).reshape(-1, 3)
+        temp = np.asarray(temp, dtype=np.float64).reshape(-1)
+        if f:
+            out[f, :, :3] = out[f - 1, :, :3]
+        hot = temp >= MIN_TEMPERATURE
+        if not hot.any():
+            continue
+        w, p = (temp[hot] / FLAME_K) ** 4, pos[hot]
+        centre = w @ p / w.sum()
+        angle = np.arctan2(p[:, 1] - centre[1], p[:, 0] - centre[0])
+        sector = np.floor((angle + np.pi) / (2 * np.pi) * LAMPS).astype(int) % LAMPS
+        for k in range(LAMPS):
+            mine = sector == k
+            if mine.any():
+                out[f, k, :3] = w[mine] @ p[mine] / w[mine].sum() + (0.0, 0.0, lift)
+                out[f, k, 3] = w[mine].sum()
+    return out
+
+
+def _eevee_only_light(name):
+    """A point light Cycles leaves dark (its light nodes emit 0) and EEVEE, which ignores light
+    nodes, lights with: Cycles has the camera-invisible flame spheres instead."""
+    data = bpy.data.lights.get(name)
+    if data is None or data.type != "POINT":
+        data = bpy.data.lights.new(name, "POINT")
+    data.shadow_soft_size = LAMP_RADIUS
+    data.use_temperature = True
+    data.use_nodes = True
+    emit = next(n for n in data.node_tree.nodes if n.bl_idname == "ShaderNodeEmission")
+    emit.inputs["Strength"].default_value = 0.0
+    return data
+
+
+def apply_lamps(obj, frames, frame_start: float) -> None:
+    """"ThinBurn Fire Lamp 1..LAMPS <sheet>": keyframed point lights that follow the fire
+    (EEVEE's flame light; see _eevee_only_light)."""
+    settings = getattr(obj, "thinburn", None)
+    height = float(getattr(settings, "flame_height", FLAME_HEIGHT))
+    track = lamp_frames(frames, LAMP_LIFT * height)
+    for k in range(LAMPS):
+        name = lamp_object_name(obj, k)
+        lamp = bpy.data.objects.get(name)
+        if lamp is not None and lamp.type != "LIGHT":
+            bpy.data.objects.remove(lamp)
+            lamp = None
+        if lamp is None:
+            lamp = bpy.data.objects.new(name, _eevee_only_light(name))
+            for coll in obj.users_collection:
+                coll.objects.link(lamp)
+        lamp.hide_select = True
+        lamp.animation_data_clear()
+        lamp.data.animation_data_clear()
+        for f, (x, y, z, weight) in enumerate(track[:, k]):
+            lamp.location = (x, y, z)
+            lamp.keyframe_insert("location", frame=frame_start + f)
+            lamp.data.energy = LAMP_POWER * weight
+            lamp.data.keyframe_insert("energy", frame=frame_start + f)
+    sync_lamps(obj)
+
+
+def sync_lamps(obj) -> None:
+    """The lamps' colour and brightness follow Flame Temperature and Intensity (live)."""
+    settings = getattr(obj, "thinburn", None)
+    for k in range(LAMPS):
+        lamp = bpy.data.objects.get(lamp_object_name(obj, k))
+        if lamp is None or lamp.type != "LIGHT":
+            continue
+        lamp.data.temperature = float(getattr(settings, "flame_temperature", FLAME_COLOR_K))
+        intensity = float(getattr(settings, "flame_intensity", 1.0))
+        lamp.data.exposure = float(np.log2(max(intensity, 1e-6)))
+
+
 # --- ash flakes -----------------------------------------------------------------------------------
 FLAKE_MATERIAL = "ThinBurn Ash"
+ATTR_BREAK = "tb_break_frame"  # the frame a flake breaks off (its material glows from then on)
+FLAKE_SIZE = 0.012     # m: side of a flake (a piece of a few faces of a fine mesh)
 FLAKE_FALL = 0.35      # m/s: terminal speed of a light flake of char
 FLAKE_DRAG = 4.0       # 1/s: how fast it reaches the air's speed plus its fall
 FLAKE_FLUTTER = 0.12   # m/s: amplitude of its side-to-side swing
 FLAKE_SPIN = (2.0, 6.0)  # rad/s: tumbling
-FLAKE_DROP = 0.03      # m: how far a flake falls with the sheet below it still burning
+FLAKE_LIFT = (0.6, 1.0)  # m/s: the fire's updraft under a flake as it breaks off (> FLAKE_FALL) ...
+FLAKE_LIFT_TIME = 0.5  # s: ... which fades as the flake leaves the flames
+FLAKE_SCATTER = (0.05, 0.25)  # m/s: ... and carries it sideways, out of the burnt hole
+FLAKE_GLOW_TIME = 0.4  # s: its ember glow fades to 1/e in this time
+FLAKE_GLOW = 1.5       # emission strength of a flake as it breaks off
+FLAKE_RAGGED = (0.6, 1.3, 0.25)  # a flake's size factor (low, high) and its corners' jitter
+FLAKE_GLOW_K = 1150.0  # K: the colour of that glow (dull orange)
 
 
 def flake_object_name(obj) -> str:
     return f"ThinBurn Ash {obj.name}"
 
 
-def _rotation(axis, angle):
-    axis = axis / np.linalg.norm(axis)
-    x, y, z = axis
-    c, s = np.cos(angle), np.sin(angle)
-    return np.array([[c + x * x * (1 - c), x * y * (1 - c) - z * s, x * z * (1 - c) + y * s],
-                     [y * x * (1 - c) + z * s, c + y * y * (1 - c), y * z * (1 - c) - x * s],
-                     [z * x * (1 - c) - y * s, z * y * (1 - c) + x * s, c + z * z * (1 - c)]])
+def _rotate(vectors, axes, angles):
+    """Rodrigues: (k, m, 3) vectors turned about unit axes (k, 3) by angles (k,)."""
+    c, s = np.cos(angles)[:, None, None], np.sin(angles)[:, None, None]
+    a = axes[:, None, :]
+    return (vectors * c + np.cross(a, vectors) * s
+            + a * np.sum(a * vectors, axis=2, keepdims=True) * (1 - c))
+
+
+def _pick_flakes(positions, faces, burnout, share, rng):
+    """The faces that shed a flake: each face that burns out within the bake, with probability
+    share * (face area / flake area), at most 1 (small faces: one flake for several of them).
+    Returns, per flake in face order, (the frame index it breaks off at, its centre, its
+    face's unit normal and first edge's direction) there; numpy over the faces of each size."""
+    n_frames = positions.shape[0]
+    draws = rng.random(len(faces))  # one per face, in face order
+    found = []
+    by_size = {}
+    for i, face in enumerate(faces):
+        by_size.setdefault(len(face), []).append(i)
+    for size, which in by_size.items():
+        which = np.array(which)
+        idx = np.array([faces[i] for i in which], dtype=np.int64).reshape(-1, size)
+        when = burnout[idx].max(axis=1)
+        soon = when < n_frames - 1
+        which, idx, f0 = which[soon], idx[soon], np.ceil(when[soon]).astype(int)
+        pts = positions[f0[:, None], idx]  # (m, size, 3) at the frame each burns out
+        edge = np.linalg.norm(pts - np.roll(pts, 1, axis=1), axis=2).mean(axis=1)
+        keep = draws[which] < share * np.minimum(1.0, (edge / FLAKE_SIZE) ** 2)
+        found.append((which[keep], f0[keep], pts[keep]))
+    order = np.concatenate([w for w, _, _ in found]) if found else np.zeros(0, dtype=int)
+    if len(order) == 0:
+        return np.zeros(0, dtype=int), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3))
+    f0 = np.concatenate([f for _, f, _ in found])
+    centre = np.concatenate([p.mean(axis=1) for _, _, p in found])
+    normal = np.concatenate([np.cross(p[:, 1] - p[:, 0], p[:, -1] - p[:, 0]) for _, _, p in found])
+    first = np.concatenate([p[:, 1] - p[:, 0] for _, _, p in found])
+    sort = np.argsort(order, kind="stable")
+    f0, centre, normal, first = f0[sort], centre[sort], normal[sort], first[sort]
+    length = np.linalg.norm(normal, axis=1, keepdims=True)
+    normal = np.where(length > 1e-12, normal / np.maximum(length, 1e-12), (0.0, 0.0, 1.0))
+    first = first - normal * np.sum(first * normal, axis=1, keepdims=True)
+    first /= np.maximum(np.linalg.norm(first, axis=1, keepdims=True), 1e-12)
+    return f0, centre, normal, first
 
 
 def flake_frames(positions, faces, burnout, dt: float, share: float, seed: int = 0,
@@ -611,77 +747,111 @@ def flake_frames(positions, faces, burnout, dt: float, share: float, seed: int =
 
     ``positions`` (frames, n, 3) world positions of the baked sheet, ``faces`` a list of vertex
     index lists, ``burnout`` (n,) frames since the first frame (cache.NEVER_FRAME: never).
-    A face that burns out within the bake (all its vertices past their burnout) sheds a flake
-    with probability ``share``: a quad of 70 % of the face's size, at the face, that from then
-    on falls at FLAKE_FALL, swings from side to side, tumbles, drifts with the wind and comes
-    to rest flat on ``floor`` (a world height; None: it keeps falling). Before it breaks off
-    the flake is folded into a point (invisible). Returns (frames, 4 * flakes, 3) corners
-    and the number of flakes. Deterministic per seed."""
+    Faces that burn out within the bake shed flakes (_pick_flakes): a torn quad about
+    FLAKE_SIZE across, at the face, that the fire's updraft first lifts (FLAKE_LIFT, fading
+    over FLAKE_LIFT_TIME) and carries sideways (FLAKE_SCATTER), then falls at FLAKE_FALL,
+    swings from side to side, tumbles, drifts with the wind and comes to rest flat on
+    ``floor`` (a world height; None: it keeps falling). Before it breaks off the flake is
+    folded into a point (invisible). Returns
+    ((frames, 4 * flakes, 3) corners, the number of flakes, (flakes,) the frame index each
+    breaks off at). Deterministic per seed; all flakes move together (numpy), frame by frame."""
     positions = np.asarray(positions, dtype=np.float64)
     n_frames = positions.shape[0]
     rng = np.random.default_rng([int(seed), 0xA5A5])
     wind = np.asarray(wind, dtype=np.float64)
-    picks = []
-    for face in faces:
-        when = float(np.max(burnout[list(face)]))
-        if when >= n_frames - 1 or rng.random() >= share:
-            continue
-        picks.append((list(face), when))
-    out = np.zeros((n_frames, 4 * len(picks), 3), dtype=np.float32)
-    for k, (face, when) in enumerate(picks):
-        f0 = int(np.ceil(when))
-        pts = positions[f0, face]
-        centre = pts.mean(axis=0)
-        size = 0.35 * float(np.mean(np.linalg.norm(pts - np.roll(pts, 1, axis=0), axis=1)))
-        normal = np.cross(pts[1] - pts[0], pts[-1] - pts[0])
-        if np.linalg.norm(normal) < 1e-12:
-            normal = np.array([0.0, 0.0, 1.0])
-        normal /= np.linalg.norm(normal)
-        u = pts[1] - pts[0]
-        u = u - normal * (u @ normal)
-        u /= max(np.linalg.norm(u), 1e-12)
-        v = np.cross(normal, u)
-        corners = size * np.array([u + v, -u + v, -u - v, u - v])  # about the centre
-        spin_axis = rng.standard_normal(3)
-        spin = rng.uniform(*FLAKE_SPIN) * rng.choice([-1.0, 1.0])
-        phase = rng.uniform(0, 2 * np.pi)
-        swing_dir = np.array([np.cos(phase), np.sin(phase), 0.0])
-        swing_rate = rng.uniform(2.0, 4.0)
-        out[:f0, 4 * k:4 * k + 4] = centre  # folded away until it breaks off
-        pos = centre.copy()
-        vel = np.zeros(3)
-        angle = 0.0
-        landed = False
-        for f in range(f0, n_frames):
-            t = (f - f0) * dt
-            if not landed:
-                target = wind + np.array([0.0, 0.0, -FLAKE_FALL])
-                target = target + FLAKE_FLUTTER * np.sin(swing_rate * t) * swing_dir * swing_rate / 3.0
-                vel += FLAKE_DRAG * (target - vel) * dt
-                if f > f0:
-                    pos = pos + vel * dt
-                    angle += spin * dt
-                rot = _rotation(spin_axis, angle)
-                shape = corners @ rot.T
-                if floor is not None and pos[2] + shape[:, 2].min() <= floor:
-                    landed = True
-                    flat = corners - np.outer(corners @ normal, normal)  # lie flat
-                    flat[:, 2] = 0.0
-                    pos = np.array([pos[0], pos[1], floor + 0.0005])
-                    shape = flat
-            out[f, 4 * k:4 * k + 4] = pos + shape
-    return out, len(picks)
+    f0, centre, normal, u = _pick_flakes(positions, faces, burnout, share, rng)
+    k = len(f0)
+    out = np.zeros((n_frames, 4 * k, 3), dtype=np.float32)
+    if k == 0:
+        return out, 0, f0
+    v = np.cross(normal, u)
+    corners = 0.5 * FLAKE_SIZE * np.stack([u + v, -u + v, -u - v, u - v], axis=1)  # about the centre
+    low, high, jitter = FLAKE_RAGGED  # torn, not cut: uneven sizes and corners
+    corners *= (rng.uniform(low, high, size=k)[:, None, None]
+                * rng.uniform(1 - jitter, 1 + jitter, size=(k, 4))[:, :, None])
+    axes = rng.standard_normal((k, 3))
+    axes /= np.linalg.norm(axes, axis=1, keepdims=True)
+    spin = rng.uniform(*FLAKE_SPIN, size=k) * rng.choice([-1.0, 1.0], size=k)
+    phase = rng.uniform(0, 2 * np.pi, size=k)
+    swing_dir = np.stack([np.cos(phase), np.sin(phase), np.zeros(k)], axis=1)
+    swing_rate = rng.uniform(2.0, 4.0, size=k)
+    lift = rng.uniform(*FLAKE_LIFT, size=k)
+    heading = rng.uniform(0, 2 * np.pi, size=k)
+    scatter = rng.uniform(*FLAKE_SCATTER, size=k)[:, None] * np.stack(
+        [np.cos(heading), np.sin(heading), np.zeros(k)], axis=1)
+    flat = corners - normal[:, None, :] * np.sum(corners * normal[:, None, :], axis=2, keepdims=True)
+    flat[:, :, 2] = 0.0  # how a flake lies once it has landed
+    pos, vel, angle = centre.copy(), np.zeros((k, 3)), np.zeros(k)
+    landed = np.zeros(k, dtype=bool)
+    rest = np.zeros((k, 4, 3))
+    for f in range(n_frames):
+        free = (f >= f0) & ~landed
+        t = (f - f0) * dt
+        draft = np.exp(-np.maximum(t, 0.0) / FLAKE_LIFT_TIME)[:, None]  # the fire's, fading
+        target = wind + draft * scatter
+        target[:, 2] += lift * draft[:, 0] - FLAKE_FALL
+        target += (FLAKE_FLUTTER * swing_rate / 3.0 * np.sin(swing_rate * t))[:, None] * swing_dir
+        vel[free] += FLAKE_DRAG * (target[free] - vel[free]) * dt
+        moving = free & (f > f0)
+        pos[moving] += vel[moving] * dt
+        angle[moving] += spin[moving] * dt
+        shape = _rotate(corners, axes, angle)
+        if floor is not None:
+            # only on the way down: a flake off a sheet lying on the floor rises first
+            down = moving & (vel[:, 2] < 0) & (pos[:, 2] + shape[:, :, 2].min(axis=1) <= floor)
+            landed |= down
+            rest[down] = flat[down] + np.stack([pos[down, 0], pos[down, 1],
+                                                np.full(int(down.sum()), floor + 0.0005)], axis=1)[:, None, :]
+        now = np.where(landed[:, None, None], rest, pos[:, None, :] + shape)
+        now[f < f0] = centre[f < f0, None, :]  # folded away until it breaks off
+        out[f] = now.reshape(-1, 3)
+    return out, k, f0
 
 
-def flake_material():
-    """"ThinBurn Ash": black, rough, a little sheen of grey ash."""
+def flake_material(fps: float):
+    """"ThinBurn Ash": black, rough char with a little grey sheen that glows a dull orange as
+    it breaks off and cools to black within about FLAKE_GLOW_TIME (it reads the flake's
+    tb_break_frame and the current frame, through a driver)."""
     mat, tree = _empty_material(FLAKE_MATERIAL, clear=False)
     if tree is None:
+        mat = bpy.data.materials[FLAKE_MATERIAL]
+        _set_glow_rate(mat, fps)
         return mat
-    bsdf = next(n for n in mat.node_tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled")
+    bsdf = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled")
     bsdf.inputs["Base Color"].default_value = (0.03, 0.028, 0.026, 1.0)
-    bsdf.inputs["Roughness"].default_value = 0.95
+    bsdf.inputs["Roughness"].default_value = 0.85
+    bsdf.inputs["Sheen Weight"].default_value = 0.4  # ash's grey fuzz at grazing angles
+    frame = node(tree, "ShaderNodeValue", -1000, -300, label="Frame")
+    frame.name = "Frame"
+    curve = frame.outputs[0].driver_add("default_value")
+    curve.driver.type = "SCRIPTED"
+    curve.driver.expression = "frame"
+    broke = node(tree, "ShaderNodeAttribute", -1000, -450, attribute_type="GEOMETRY",
+                 attribute_name=ATTR_BREAK)
+    age = node(tree, "ShaderNodeMath", -800, -350, operation="SUBTRACT")  # frames since
+    tree.links.new(frame.outputs[0], age.inputs[0])
+    tree.links.new(broke.outputs["Fac"], age.inputs[1])
+    rate = node(tree, "ShaderNodeMath", -600, -350, operation="MULTIPLY")
+    rate.name = "Glow Rate"
+    tree.links.new(age.outputs[0], rate.inputs[0])
+    fade = node(tree, "ShaderNodeMath", -400, -350, operation="EXPONENT")
+    tree.links.new(rate.outputs[0], fade.inputs[0])
+    glow = node(tree, "ShaderNodeMath", -200, -350, operation="MULTIPLY")
+    tree.links.new(fade.outputs[0], glow.inputs[0])
+    glow.inputs[1].default_value = FLAKE_GLOW
+    body = node(tree, "ShaderNodeBlackbody", -200, -150)
+    body.inputs["Temperature"].default_value = FLAKE_GLOW_K
+    tree.links.new(body.outputs[0], bsdf.inputs["Emission Color"])
+    tree.links.new(glow.outputs[0], bsdf.inputs["Emission Strength"])
+    _set_glow_rate(mat, fps)
     return mat
+
+
+def _set_glow_rate(mat, fps: float) -> None:
+    """exp(-age_frames / (FLAKE_GLOW_TIME * fps)): the scene's frame rate sets the fade."""
+    rate = mat.node_tree.nodes.get("Glow Rate") if mat.node_tree is not None else None
+    if rate is not None:
+        rate.inputs[1].default_value = -1.0 / (FLAKE_GLOW_TIME * fps)
 
 
 def apply_flakes(obj, sheet_pc2_path: str, frame_start: float, burnout_frames, floor) -> None:
@@ -702,8 +872,8 @@ def apply_flakes(obj, sheet_pc2_path: str, frame_start: float, burnout_frames, f
     since = np.asarray(burnout_frames, dtype=np.float64) - frame_start
     scene = bpy.context.scene
     dt = scene.render.fps_base / scene.render.fps
-    corners, count = flake_frames(world, faces, since, dt, share,
-                                  seed=int(getattr(settings, "seed", 0)), floor=floor)
+    corners, count, broke = flake_frames(world, faces, since, dt, share,
+                                         seed=int(getattr(settings, "seed", 0)), floor=floor)
     if count == 0:
         return
     abs_path = abs_sheet[:-len(".pc2")] + "_ash.pc2"
@@ -713,7 +883,8 @@ def apply_flakes(obj, sheet_pc2_path: str, frame_start: float, burnout_frames, f
     mesh = bpy.data.meshes.new(name)
     mesh.from_pydata(corners[0].tolist(), [], [(4 * k, 4 * k + 1, 4 * k + 2, 4 * k + 3)
                                               for k in range(count)])
-    mesh.materials.append(flake_material())
+    cache.write_point_attribute(mesh, ATTR_BREAK, np.repeat(frame_start + broke, 4).astype(np.float32))
+    mesh.materials.append(flake_material(1.0 / dt))
     flakes = bpy.data.objects.new(name, mesh)
     for coll in obj.users_collection:
         coll.objects.link(flakes)

@@ -9,6 +9,8 @@ import bpy
 import mathutils
 import numpy as np
 
+from . import fields
+from .fields import FieldSpec
 from .properties import DYNAMIC_PARAMS
 
 
@@ -18,14 +20,21 @@ class BakeError(Exception):
 
 @dataclass
 class FrameSample:
-    """What the scene says at one frame: each igniter's (position, strength, radius), the wind."""
+    """What the scene says at one frame: each igniter's (world position, strength, radius),
+    the force fields, the motion parameters and the sheet's world matrix."""
 
     frame: int
     igniters: list
-    wind: tuple
-    dynamics: dict  # the keyframeable motion parameters and the scene's gravity
-    surfaces: list = None  # each lit mesh igniter's (surface points (k, 3), radius)
-    flames: list = None    # each lit Flame igniter's (position (3,), flame width m)
+    fields: list    # fields.FieldSpec, world space
+    wind_scale: float
+    dynamics: dict  # the keyframeable motion parameters and the scene's gravity (world)
+    matrix: np.ndarray  # the sheet's matrix_world (4, 4)
+    surfaces: list = None  # each lit mesh igniter's (world surface points (k, 3), radius)
+    flames: list = None    # each lit Flame igniter's (world position (3,), flame width m)
+
+    def wind_at(self, points) -> np.ndarray:
+        """(n, 3) wind in m/s at world points: the fields times the sheet's Wind Scale."""
+        return fields.wind_at(self.fields, points, self.frame) * self.wind_scale
 
 
 def sheet_geometry(obj):
@@ -67,7 +76,9 @@ def pin_mask(obj, group_name: str) -> np.ndarray:
     """(n,) bool: the vertices of the pin group with weight above 0.5."""
     group = obj.vertex_groups.get(group_name)
     if group is None:
-        raise BakeError(f"pin group '{group_name}' is not a vertex group of '{obj.name}'")
+        raise BakeError(f"pin group '{group_name}' is not a vertex group of '{obj.name}': "
+                        "choose one of its vertex groups as Pin Group (Physics > ThinBurn > "
+                        "Motion), or clear it")
     mask = np.zeros(len(obj.data.vertices), dtype=bool)
     index = group.index
     for v in obj.data.vertices:
@@ -204,10 +215,33 @@ def surface_points(obj, spacing: float, limit: int = 200_000) -> np.ndarray:
     return np.concatenate(out)
 
 
+FIELD_KINDS = ("WIND", "TURBULENCE")  # the force fields that blow on a sheet
+FIELD_SHAPES = ("POINT", "LINE", "PLANE")
+
+
 def wind_objects(view_layer) -> list:
-    """Names of the Wind force fields in the view layer."""
+    """Names of the Wind and Turbulence force fields in the view layer."""
     return [o.name for o in view_layer.objects
-            if o.field is not None and o.field.type == "WIND"]
+            if o.field is not None and o.field.type in FIELD_KINDS]
+
+
+def field_spec(ob) -> FieldSpec:
+    """A force field's settings now, in world space (fields.py evaluates them)."""
+    f = ob.field
+    m = ob.matrix_world
+    axis = np.array(m.to_3x3().col[2], dtype=np.float64)
+    length = float(np.linalg.norm(axis))
+    axis = axis / length if length > 0 else np.array([0.0, 0.0, 1.0])
+    return FieldSpec(
+        kind=f.type, origin=tuple(float(c) for c in m.translation), axis=tuple(float(c) for c in axis),
+        shape=f.shape if f.shape in FIELD_SHAPES else "POINT", strength=float(f.strength),
+        noise=float(f.noise), seed=int(f.seed), z_direction=f.z_direction, falloff=f.falloff_type,
+        power=float(f.falloff_power), use_min=bool(f.use_min_distance),
+        min_distance=float(f.distance_min), use_max=bool(f.use_max_distance),
+        max_distance=float(f.distance_max), radial_power=float(f.radial_falloff),
+        use_radial_min=bool(f.use_radial_min), radial_min=float(f.radial_min),
+        use_radial_max=bool(f.use_radial_max), radial_max=float(f.radial_max),
+        size=float(f.size), global_coords=bool(f.use_global_coords))
 
 
 # --- what the bake ignores, said so ---------------------------------------------------------------
@@ -248,50 +282,43 @@ def transform_animation(obj):
     return None
 
 
-def moved_warning(name: str, what: str, frame) -> str:
-    at = f"at frame {frame} " if frame is not None else ""
-    return (f"'{name}' moves in the scene ({what}), but the bake ignores that: it reads where "
-            f"the sheet is {at}only. Keep the sheet still and animate the igniters, wind, pins "
-            "or floor instead")
+def floor_motion_error(name: str, what: str, frame) -> str:
+    return (f"'{name}' tilts or moves up or down in the scene ({what}; at frame {frame}), and "
+            "its Floor cannot follow that: set Floor to None (Physics > ThinBurn > Floor), or "
+            "animate only the sheet's X/Y location and Z rotation")
+
+
+def tilt_warning(name: str, degrees: float) -> str:
+    return (f"'{name}' tilts up to {degrees:.0f}° during the bake: ThinBurn follows it, but keeps "
+            "the sheet's buoyancy, the fire's climb and the flames' rise along its up direction "
+            "at Start, not the world's up")
 
 
 def wind_warnings(view_layer) -> list:
-    """What the bake ignores of the force fields: a Wind field blows evenly over the sheet
-    along its Z axis (Strength × Wind Scale, read every frame); its shape, falloff, distances
-    and noise, and every other kind of field, are not used."""
+    """What the bake ignores of the force fields: Wind and Turbulence fields blow on the sheet
+    with their shape (Point, Line, Plane), strength, falloff, distances and noise, read every
+    frame; a Surface or Every Point shape, and every other kind of field, are not used."""
     out = []
     for ob in view_layer.objects:
         field = ob.field
         if field is None or field.type == "NONE":
             continue
-        if field.type != "WIND":
-            kind = field.type.replace("_", " ").title()
+        kind = field.type.replace("_", " ").title()
+        if field.type not in FIELD_KINDS:
             out.append(f"'{ob.name}' (a {kind} field) does not act on ThinBurn sheets: only Wind "
-                       "fields blow on them")
-            continue
-        ignored = []
-        if field.shape not in {"PLANE", "POINT"}:
-            ignored.append(f"Shape ({field.shape.title()})")
-        if field.falloff_power > 0.0:
-            ignored.append(f"Falloff ({field.falloff_type.title()}, power {field.falloff_power:g})")
-        if field.use_min_distance:
-            ignored.append("Min Distance")
-        if field.use_max_distance:
-            ignored.append("Max Distance")
-        if field.noise > 0.0:
-            ignored.append(f"Noise ({field.noise:g})")
-        if ignored:
-            out.append(f"Wind '{ob.name}': its {', '.join(ignored)} "
-                       f"{'is' if len(ignored) == 1 else 'are'} ignored: ThinBurn blows the wind "
-                       "evenly over the whole sheet, along the field's Z axis")
+                       "and Turbulence fields blow on them")
+        elif field.shape not in FIELD_SHAPES:
+            out.append(f"{kind} '{ob.name}': its Shape ({field.shape.title()}) is not used: "
+                       "ThinBurn measures its falloff from the field's centre (Shape Point); "
+                       "set Shape to Point, Line or Plane")
     return out
 
 
 def sample_frame(scene, frame: int, sheet_name: str, igniters: list, winds: list,
                  spacing: float = 0.0) -> FrameSample:
-    """Move the scene to ``frame`` and read the igniters and the wind. Empties (any object
-    but a mesh) light around their origin; mesh igniters around their surface, sampled
-    ``spacing`` apart.
+    """Move the scene to ``frame`` and read the igniters, the force fields and the sheet's
+    transform. Empties (any object but a mesh) light around their origin; mesh igniters around
+    their surface, sampled ``spacing`` apart; Flames burn on their own at their origin.
 
     frame_set evaluates the scene and writes animated values and world matrices back to the
     original objects (those of the active depsgraph), which is what is read here.
@@ -315,17 +342,11 @@ def sample_frame(scene, frame: int, sheet_name: str, igniters: list, winds: list
             continue
         samples.append((np.array(ob.matrix_world.translation, dtype=np.float64),
                         float(ig.strength), float(ig.radius)))
-    wind = np.zeros(3)
-    for name in winds:
-        ob = objects[name]
-        axis = np.array(ob.matrix_world.to_3x3().col[2], dtype=np.float64)
-        length = np.linalg.norm(axis)
-        if length > 0:
-            wind += axis / length * ob.field.strength
-    settings = objects[sheet_name].thinburn
-    wind *= settings.wind_scale
-    return FrameSample(frame, samples, tuple(float(w) for w in wind), dynamics(scene, settings),
-                       surfaces, flames)
+    sheet = objects[sheet_name]
+    settings = sheet.thinburn
+    return FrameSample(frame, samples, [field_spec(objects[name]) for name in winds],
+                       float(settings.wind_scale), dynamics(scene, settings),
+                       np.array(sheet.matrix_world, dtype=np.float64), surfaces, flames)
 
 
 def dynamics(scene, settings) -> dict:
@@ -349,7 +370,8 @@ def cache_path(obj, settings) -> tuple:
     ``<Cache Folder>/<blend name>/<object name>.pc2``."""
     raw = settings.cache_dir.strip()
     if not raw:
-        raise BakeError("the cache folder is empty: choose a folder for the bake")
+        raise BakeError("the Cache Folder is empty: choose a folder for the bake "
+                        "(Physics > ThinBurn > Cache; '//thinburn_cache/' keeps it beside the .blend)")
     if raw.startswith("//") and not bpy.data.filepath:
         raise BakeError(f"the cache folder '{raw}' is relative to the .blend file, which is not "
                         "saved yet: save the file or choose an absolute folder")
@@ -359,8 +381,10 @@ def cache_path(obj, settings) -> tuple:
     try:
         os.makedirs(folder, exist_ok=True)
     except OSError as exc:
-        raise BakeError(f"cannot create the cache folder '{folder}': {exc.strerror or exc}") from None
+        raise BakeError(f"cannot create the cache folder '{folder}': {exc.strerror or exc}. "
+                        "Choose another Cache Folder (Physics > ThinBurn > Cache)") from None
     if not os.access(folder, os.W_OK):
-        raise BakeError(f"the cache folder '{folder}' is not writable")
+        raise BakeError(f"the cache folder '{folder}' is not writable: choose another Cache "
+                        "Folder (Physics > ThinBurn > Cache)")
     shown = raw if raw.endswith(("/", "\\")) else raw + "/"
     return f"{shown}{stem}/{name}", os.path.join(folder, name)

@@ -14,11 +14,14 @@ import bpy
 import numpy as np
 import thinburn
 
-from . import cache, fire, inputs, materials, properties, stretch
+from . import cache, fire, inputs, materials, moving, properties, stretch
 from .inputs import BakeError
 from .worker import CoreWorker, FrameTask, path_ignitions
 
 LOOKAHEAD = 4  # frames sampled ahead of the worker
+# A sheet whose transform tilts it further than this is told that buoyancy, climb and flames
+# keep its up at Start (moving.py): below it the error in "up" is under 1 - cos 10° = 1.5 %.
+TILT_WARNING_DEG = 10.0
 
 
 def core_supports(name: str) -> bool:
@@ -91,6 +94,9 @@ def explain_core_error(text: str, lattice: int) -> str:
         now = "0: the core's choice" if lattice == 0 else str(lattice)
         out += (f". The lattice is Motion Detail (Physics > ThinBurn, now {now}): set it "
                 f"{'higher' if lattice else 'yourself'}, e.g. 9 or more, or change Fire Detail")
+    elif "wind" in text:
+        out += (". The wind is each Wind or Turbulence field's Strength (and Noise) × Wind Scale "
+                "(Physics > ThinBurn): lower them")
     elif "cells" in text:
         out += ". The cells are Fire Detail (Physics > ThinBurn)"
     return out
@@ -126,7 +132,10 @@ class BakeJob:
             self.floor = kwargs.get("floor")  # where the ash flakes land, too
             _check_floor(obj, world, self.floor, settings)
             self.modifier_path, self.abs_path = inputs.cache_path(obj, settings)
-            self.writer = cache.PC2Writer(self.abs_path, len(world), start_frame=float(self.frames[0]))
+            self.cache_step = int(settings.cache_step)
+            self.writer = cache.PC2Writer(self.abs_path, len(world), start_frame=float(self.frames[0]),
+                                          sample_rate=float(self.cache_step))
+            self.thinned = cache.ThinnedSamples(self.writer, self.cache_step)
         except OSError as exc:
             self._restore_frame()
             raise BakeError(f"cannot write the cache file in '{settings.cache_dir}': "
@@ -168,9 +177,12 @@ class BakeJob:
                 f"{settings.cells} fire cells, so the burn shows only at those points: subdivide "
                 f"the mesh (Edit Mode > Subdivide; about {settings.cells // 2} cuts) for a "
                 "visible fire front")
-        self.moved_at = None  # the first frame where the sheet's transform differs from Start
+        # The sheet's animated transform is followed: the core runs in the bake frame (moving.py),
+        # F_k maps it to the world at frame index k.
+        self.frame_maps = {}
+        self.tilt = 0.0  # degrees, the most the bake frame's up turned from the world's
         self.worker = CoreWorker(lambda: thinburn.Simulation(world, tris, **kwargs), self.dt,
-                                 self.want_particles)
+                                 self.want_particles, shell=self.shell)
         self.worker.start()
 
     # --- setup -------------------------------------------------------------------------------
@@ -227,6 +239,20 @@ class BakeJob:
     def progress(self) -> float:
         return self.frames_done / len(self.frames)
 
+    def eta_text(self) -> str:
+        """Time left at the pace so far ("12 s", "2 min 5 s"; "?" before the first frame)."""
+        frac = self.progress
+        if frac <= 0.0:
+            return "?"
+        left = (_time.perf_counter() - self.started) * (1.0 / frac - 1.0)
+        return f"{left:.0f} s" if left < 60 else f"{int(left // 60)} min {left % 60:.0f} s"
+
+    def status_text(self) -> str:
+        """The status bar's line during a UI bake: sheet, frame, percentage, ETA."""
+        return (f"ThinBurn: baking '{self.obj_name}' frame {self.current_frame} of "
+                f"{self.frames[0]}–{self.frames[-1]} ({100 * self.progress:.0f} %, ETA "
+                f"{self.eta_text()})  (Esc to cancel)")
+
     @property
     def current_frame(self) -> int:
         return self.frames[min(self.frames_done, len(self.frames) - 1)]
@@ -266,12 +292,10 @@ class BakeJob:
             need = min(self.next_task + 1, n - 1)
             while self.next_sample <= need:
                 frame = self.frames[self.next_sample]
-                self.samples[self.next_sample] = inputs.sample_frame(
-                    self.scene, frame, self.obj_name, self.igniters, self.winds, self.spacing)
-                if self.moved_at is None and not np.allclose(
-                        np.array(bpy.data.objects[self.obj_name].matrix_world), self.matrix,
-                        rtol=0.0, atol=1e-6):
-                    self.moved_at = frame
+                sample = inputs.sample_frame(self.scene, frame, self.obj_name, self.igniters,
+                                             self.winds, self.spacing)
+                self.samples[self.next_sample] = sample
+                self._follow(self.next_sample, sample)
                 self.next_sample += 1
             self.worker.tasks.put(self._task(self.next_task))
             self.samples.pop(self.next_task - 1, None)
@@ -279,30 +303,55 @@ class BakeJob:
             if _time.perf_counter() > deadline:
                 break
 
+    def _follow(self, k: int, sample) -> None:
+        """Record frame k's map from the bake frame to the world; a floor must stay level in
+        the bake frame (the core's floor is z = const there)."""
+        F = moving.frame_map(sample.matrix, self.inverse)
+        self.frame_maps[k] = F
+        if self.floor is not None and not moving.keeps_floor(F):
+            obj = bpy.data.objects[self.obj_name]
+            what = inputs.transform_animation(obj) or "its transform changes"
+            raise BakeError(inputs.floor_motion_error(self.obj_name, what, sample.frame))
+        self.tilt = max(self.tilt, moving.tilt_degrees(F))
+
     def _task(self, k: int) -> FrameTask:
         last = k == len(self.frames) - 1
         here = self.samples[k]
         there = None if last else self.samples[k + 1]
+        F = self.frame_maps[k]
         ignitions = []
         for i, start in enumerate(here.igniters):
-            end = None if there is None else there.igniters[i]
+            start = self._in_bake_frame(start, F)
+            end = None if there is None else self._in_bake_frame(there.igniters[i], self.frame_maps[k + 1])
             spacing = max(self.spacing, 0.5 * start[2])
             ignitions += path_ignitions(start, end, k * self.dt, self.dt, spacing)
         changed = {}
         if self.shell:
-            changed = {key: v for key, v in here.dynamics.items() if self.dynamics.get(key) != v}
+            now = dict(here.dynamics)
+            now["gravity"] = tuple(float(g) for g in moving.direction_to_bake(F, now["gravity"]))
+            changed = {key: v for key, v in now.items() if self.dynamics.get(key) != v}
             self.dynamics.update(changed)
         # A mesh igniter lights the cells within its radius of its surface (at least the
-        # surface's sampling, half a cell, so that radius 0 still touches the sheet).
-        surfaces = [(pts, max(radius, self.spacing), k * self.dt) for pts, radius in (here.surfaces or [])]
+        # surface's sampling, half a cell, so that radius 0 still touches the sheet); its points
+        # and the Flames' positions go into the bake frame as the Empties' do.
+        surfaces = [(moving.to_bake(F, pts), max(radius, self.spacing), k * self.dt)
+                    for pts, radius in (here.surfaces or [])]
         flames = None
         if self.flames:  # every frame, so a Flame that goes out stops emitting
             lit = here.flames or []
-            flames = (np.array([p for p, _ in lit], dtype=np.float64).reshape(-1, 3),
+            flames = (moving.to_bake(F, np.array([p for p, _ in lit], dtype=np.float64).reshape(-1, 3)),
                       np.array([w for _, w in lit], dtype=np.float64))
         painted = self.ignite_values if k == self.ignite_index else None
-        return FrameTask(index=k, ignitions=ignitions, wind=here.wind, dynamics=changed,
-                         step=not last, surfaces=surfaces, painted=painted, flames=flames)
+        return FrameTask(index=k, ignitions=ignitions, fields=here.fields,
+                         wind_scale=here.wind_scale, frame=here.frame, to_world=F,
+                         dynamics=changed, step=not last, surfaces=surfaces, painted=painted,
+                         flames=flames)
+
+    @staticmethod
+    def _in_bake_frame(igniter, F):
+        """An igniter's (world position, strength, radius) with its position in the bake frame."""
+        pos, strength, radius = igniter
+        return moving.to_bake(F, pos[None, :])[0], strength, radius
 
     def _drain(self, block: bool) -> None:
         while not self.finished:
@@ -321,10 +370,12 @@ class BakeJob:
                 _, index, positions, lit, particles = msg
                 if self.stretch is not None:
                     self.stretch.add(positions, self.frames[index])
-                self.writer.append(self._to_local(positions))
+                self.thinned.add(index, self._to_local(positions))
                 self.lit += lit
-                if particles is not None:
-                    self.particle_frames.append(particles)
+                if particles is not None:  # to the world: the fire objects do not move
+                    pts, temps = particles
+                    F = self.frame_maps[index]
+                    self.particle_frames.append((moving.to_world(F, pts).astype(np.float32), temps))
                 self.frames_done = index + 1
                 if block and self.next_task < len(self.frames):
                     return  # let run() sample more
@@ -351,11 +402,18 @@ class BakeJob:
         obj = bpy.data.objects.get(self.obj_name)
         if obj is None:
             self._fail(f"the sheet '{self.obj_name}' was deleted during the bake")
+        self.thinned.finish(len(self.frames) - 1)
         self.writer.commit()
         start = float(self.frames[0])
         ignite = cache.seconds_to_frames(ignite_s, start, self.fps)
         burnout = cache.seconds_to_frames(burnout_s, start, self.fps)
         materials.apply_bake(obj, self.modifier_path, start, ignite, burnout, self.floor)
+        # Keep Every k: sample j of the file is frame Start + j k. The Mesh Cache modifier reads
+        # sample (Frame Scale × frame − Frame Start) and blends between samples (its source,
+        # MOD_meshcache.cc), so Frame Scale = 1/k and Frame Start = Start/k.
+        md = obj.modifiers[materials.CACHE_MODIFIER]
+        md.frame_scale = 1.0 / self.cache_step
+        md.frame_start = start / self.cache_step
         if self.want_particles:
             fire.apply_particles(obj, self.modifier_path, self.particle_frames, start)
         obj.thinburn.baked_file = self.modifier_path
@@ -379,7 +437,5 @@ class BakeJob:
             text = stretch.stretch_warning(self.obj_name, worst, at, self.lattice)
             if text:
                 self.warnings.append(text)
-        if self.moved_at is not None:
-            what = (inputs.transform_animation(obj)
-                    or f"its transform at frame {self.moved_at} is not the one at {self.frames[0]}")
-            self.warnings.append(inputs.moved_warning(self.obj_name, what, self.frames[0]))
+        if self.tilt > TILT_WARNING_DEG:
+            self.warnings.append(inputs.tilt_warning(self.obj_name, self.tilt))

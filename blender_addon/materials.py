@@ -17,8 +17,9 @@ import numpy as np
 
 import bpy
 
-from . import cache
-from .fire import apply_flakes, ember_object_name, fire_object_name, flake_object_name, light_object_name
+from . import cache, mantaflow
+from .fire import (LAMPS, apply_flakes, ember_object_name, fire_object_name, flake_object_name,
+                   lamp_object_name, light_object_name)
 from .nodes import (ensure_modifier, interface_socket, link, map_range, new_group, node, set_input,
                     socket, use_nodes)
 
@@ -416,7 +417,7 @@ def apply_bake(obj, pc2_path: str, frame_start: float, ignite, burnout, floor=No
 def _made_objects(obj) -> list:
     """The objects a bake of the sheet made, found by the names it gives them now."""
     names = (fire_object_name(obj), light_object_name(obj), ember_object_name(obj),
-             flake_object_name(obj))
+             flake_object_name(obj), *(lamp_object_name(obj, k) for k in range(LAMPS)))
     return [o for o in map(bpy.data.objects.get, names) if o is not None]
 
 
@@ -446,6 +447,8 @@ def _remove_object(ob) -> None:
     bpy.data.objects.remove(ob)
     if mesh is not None and mesh.users == 0 and isinstance(mesh, bpy.types.Mesh):
         bpy.data.meshes.remove(mesh)
+    elif mesh is not None and mesh.users == 0 and isinstance(mesh, bpy.types.Light):
+        bpy.data.lights.remove(mesh)
 
 
 def record_bake(obj) -> list:
@@ -526,6 +529,7 @@ def free_bake(obj) -> list:
         _remove_object(fire)
         if "fire particles" not in gone:
             gone.append("fire particles")
+    gone += mantaflow.free(obj, delete_files=not recorded or owns_cache(settings))
     _delete_files(paths, gone)
     settings.baked_file = ""
     settings.baked_shape = ""

@@ -37,7 +37,8 @@ def _draw_status(self, context):
         batch = getattr(job, "batch", None)
         which = f"'{job.obj_name}' ({batch[0]} of {batch[1]}) " if batch and batch[1] > 1 else ""
         self.layout.progress(factor=job.progress, type="BAR",
-                             text=f"ThinBurn {which}frame {job.current_frame} / {job.frames[-1]}  (Esc cancels)")
+                             text=f"ThinBurn {which}frame {job.current_frame} / {job.frames[-1]}, "
+                                  f"ETA {job.eta_text()}  (Esc cancels)")
 
 
 def bake_now(context, obj, stream=None, interval: float = 1.0, on_frame=None) -> BakeJob:
@@ -47,7 +48,8 @@ def bake_now(context, obj, stream=None, interval: float = 1.0, on_frame=None) ->
     a failed or interrupted bake leaves the previous one as it was."""
     scene = context.scene
     if running_job(scene) is not None:
-        raise BakeError("another ThinBurn bake is running in this scene")
+        raise BakeError("another ThinBurn bake is running in this scene: wait for it to finish, "
+                        "or press Esc to cancel it")
     job = BakeJob(context, obj)
     lines = ProgressLines(job.obj_name, stream, interval) if stream is not None else None
 
@@ -151,9 +153,7 @@ class BakeSheets:
             self._end(context)
             raise
         context.window_manager.progress_update(int(1000 * job.progress))
-        context.workspace.status_text_set(
-            f"ThinBurn: baking '{job.obj_name}' frame {job.current_frame} of "
-            f"{job.frames[0]}–{job.frames[-1]}  (Esc to cancel)")
+        context.workspace.status_text_set(job.status_text())
         for area in context.screen.areas:
             if area.type in {"PROPERTIES", "STATUSBAR"}:
                 area.tag_redraw()
@@ -320,6 +320,61 @@ class THINBURN_OT_add_burn_to_material(bpy.types.Operator):
 CLASSES = CLASSES + (THINBURN_OT_add_burn_to_material,)
 
 
+class THINBURN_OT_add_mantaflow_fire(bpy.types.Operator):
+    """Make the baked sheet a Mantaflow fire source that emits from its burning edge, inside a
+    smoke domain sized to the burn (Free Bake removes both)"""
+
+    bl_idname = "thinburn.add_mantaflow_fire"
+    bl_label = "Add Mantaflow Fire"
+    bl_options = {"REGISTER", "UNDO"}
+
+    bake: bpy.props.BoolProperty(
+        name="Bake Now", default=False,
+        description="Bake the smoke domain right away (else bake it from its Physics > Cache panel)")
+    hide_flames: bpy.props.BoolProperty(
+        name="Hide ThinBurn Flames", default=True,
+        description="Hide the add-on's own flame volume, which Mantaflow's flames replace (its "
+                    "light and the embers stay)")
+
+    @classmethod
+    def poll(cls, context):
+        return _sheet(context) is not None and running_job(context.scene) is None
+
+    def execute(self, context):
+        from . import mantaflow
+        obj = _sheet(context)
+        if not obj.thinburn.baked_file:
+            self.report({"ERROR"}, f"ThinBurn: bake '{obj.name}' first (Physics > ThinBurn > "
+                                   "Bake): the fire source follows the baked burning edge")
+            return {"CANCELLED"}
+        try:
+            mantaflow.prepare_solver(context.scene)  # before the domain's solver exists (bpy module)
+            usable = True
+        except mantaflow.MantaflowError as exc:
+            self.report({"WARNING"}, f"ThinBurn: {exc}")
+            usable = False
+        mantaflow.add_flow(obj)
+        domain = mantaflow.add_domain(obj, context.scene, obj.thinburn.mantaflow_resolution)
+        mantaflow.hide_thinburn_flames(obj, self.hide_flames)
+        if self.bake and usable:
+            try:
+                mantaflow.bake(domain, context.scene)
+            except mantaflow.MantaflowError as exc:
+                self.report({"ERROR"}, f"ThinBurn: {exc}")
+                usable = False
+        self.report({"INFO"}, f"ThinBurn: '{obj.name}' emits fire into '{domain.name}'"
+                              + (" (baked)" if self.bake and usable
+                                 else "; bake it in its Physics > Cache panel"))
+        return {"FINISHED"}
+
+
+CLASSES = CLASSES + (THINBURN_OT_add_mantaflow_fire,)
+
+
+def _quick_effects_menu(self, context):
+    self.layout.operator(THINBURN_OT_add_mantaflow_fire.bl_idname, icon="FORCE_FORCE")
+
+
 @bpy.app.handlers.persistent
 def _claim_unsaved_bakes(filepath, *_):
     """A bake made before the file was first saved belongs to the file it is saved as (so that
@@ -334,9 +389,11 @@ def register():
     for cls in CLASSES:
         bpy.utils.register_class(cls)
     bpy.app.handlers.save_pre.append(_claim_unsaved_bakes)
+    bpy.types.VIEW3D_MT_object_quick_effects.append(_quick_effects_menu)
 
 
 def unregister():
+    bpy.types.VIEW3D_MT_object_quick_effects.remove(_quick_effects_menu)
     if _claim_unsaved_bakes in bpy.app.handlers.save_pre:
         bpy.app.handlers.save_pre.remove(_claim_unsaved_bakes)
     for job in list(_running.values()):

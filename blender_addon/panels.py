@@ -57,11 +57,15 @@ class PHYSICS_PT_thinburn(ThinBurnPhysicsPanel, bpy.types.Panel):
 
 
 def sheet_warnings(context, obj) -> list:
-    """What the bake will ignore, as the panel says it (the bake's report says it too)."""
+    """What the bake will ignore or refuse, as the panel says it (the bake says it too). An
+    animated transform is followed, but not with a Floor unless it only slides in X/Y and
+    turns about Z; the panel cannot tell that without playing the frames, so it says what the
+    bake will check."""
     out = []
     moving = inputs.transform_animation(obj)
-    if moving:
-        out.append(inputs.moved_warning(obj.name, moving, obj.thinburn.frame_start))
+    if moving and obj.thinburn.floor_mode != "NONE":
+        out.append(f"'{obj.name}' moves in the scene ({moving}) and has a Floor: the bake follows "
+                   "the motion only if it slides in X/Y and turns about Z; else set Floor to None")
     return out + inputs.wind_warnings(context.view_layer)
 
 
@@ -149,6 +153,7 @@ class PHYSICS_PT_thinburn_cache(ThinBurnPhysicsPanel, bpy.types.Panel):
         col.prop(settings, "frame_start")
         col.prop(settings, "frame_end")
         layout.prop(settings, "cache_dir")
+        layout.prop(settings, "cache_step")
         running = running_job(context.scene)
         if running is not None:
             layout.progress(factor=running.progress, type="BAR",
@@ -186,6 +191,9 @@ class PHYSICS_PT_thinburn_fire(ThinBurnPhysicsPanel, bpy.types.Panel):
         layout.prop(settings, "burnt")
         layout.prop(settings, "flakes")
         layout.operator("thinburn.add_burn_to_material", icon="MATERIAL")
+        row = layout.row(align=True)
+        row.prop(settings, "mantaflow_resolution")
+        row.operator("thinburn.add_mantaflow_fire", text="Add Mantaflow Fire", icon="FORCE_FORCE")
         cycles = getattr(context.scene, "cycles", None)
         if cycles is not None and not getattr(cycles, "volume_biased", True):
             layout.label(text="Flames render far faster with Light Paths > Volumes > Biased",

@@ -242,6 +242,12 @@ class ThinBurnSettings(bpy.types.PropertyGroup):
     cache_dir: StringProperty(
         name="Cache Folder", default="//thinburn_cache/", subtype="DIR_PATH", options=RELATIVE_PATH,
         description="Folder of the bake's PC2 file; '//' means next to the .blend file")
+    cache_step: IntProperty(
+        name="Keep Every", default=1, min=1, soft_max=8, max=48, options=STATIC,
+        description="Store the sheet's shape only every this many frames (1: every frame). "
+                    "The Mesh Cache modifier blends linearly between the stored frames, so a "
+                    "big mesh's cache shrinks this many times, at a small error in its motion "
+                    "(docs/blender.md measures it). The fire's own files keep every frame")
 
     flame_height: FloatProperty(
         name="Flame Height", default=0.06, min=0.0, soft_max=0.5, subtype="DISTANCE", unit="LENGTH",
@@ -269,6 +275,15 @@ class ThinBurnSettings(bpy.types.PropertyGroup):
     embers: FloatProperty(
         name="Embers", default=1.0, min=0.0, soft_max=10.0, options=STATIC,
         description="How many sparks the fire throws off (0: none); read by the bake")
+
+    mantaflow_resolution: IntProperty(
+        name="Smoke Resolution", default=64, min=8, soft_max=256, options=STATIC,
+        description="Resolution of the Mantaflow domain that Add Mantaflow Fire makes: voxels "
+                    "along its longest side (more: finer flames, slower bakes)")
+    mantaflow_domain: PointerProperty(
+        type=bpy.types.Object, name="Smoke Domain", options=STATIC,
+        description="The Mantaflow domain Add Mantaflow Fire made for this sheet (Free Bake "
+                    "removes it and its cache folder)")
 
     show_advanced: BoolProperty(name="Advanced", default=False, options=STATIC,
                                 description="Show the material and model parameters")

@@ -50,6 +50,7 @@ def scene_spec(obj, context=None):
             params.update(inputs.dynamics(scene, settings))
         spacing = 0.5 * inputs.cell_spacing(world, tris, settings.cells)
         samples = [inputs.sample_frame(scene, f, obj.name, igniters, winds) for f in frames]
+        centre = world.mean(axis=0)  # a scene file has one wind per frame: the fields' here
     finally:
         scene.frame_set(restore)
     ignitions, seen = [], set()
@@ -71,7 +72,7 @@ def scene_spec(obj, context=None):
                      frames=len(frames), seed=int(settings.seed), front=settings.front,
                      lattice=(int(settings.lattice) or None) if shell else None, floor=floor,
                      pinned=pinned, integrator=settings.integrator, shell=shell,
-                     wind=[list(s.wind) for s in samples], params=params)
+                     wind=[s.wind_at(centre)[0].tolist() for s in samples], params=params)
 
 
 def write_scene(obj, path, context=None) -> str:

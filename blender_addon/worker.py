@@ -1,7 +1,7 @@
 """The bake's worker thread: it drives the thinburn core and nothing else.
 
 No bpy here. The main thread reads the scene, turns each frame into a ``FrameTask`` (its
-ignitions and wind, plain numbers) and queues it; the worker runs the core's ``ignite``,
+ignitions, force fields and frame map, plain numbers) and queues it; the worker runs the core's ``ignite``,
 ``step`` and array copies with the GIL released inside the core, and queues the results.
 """
 from __future__ import annotations
@@ -13,6 +13,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from . import fields, moving
+
 MAX_PATH_SAMPLES = 64  # per igniter and frame: bounds the work of a fast-moving igniter
 
 
@@ -21,8 +23,11 @@ class FrameTask:
     """One frame for the worker: light these points, record the state, then step."""
 
     index: int                      # 0 for the bake's first frame
-    ignitions: list = field(default_factory=list)  # (point (3,), time s, radius m)
-    wind: tuple = (0.0, 0.0, 0.0)   # m/s, blowing during the step that follows
+    ignitions: list = field(default_factory=list)  # (point (3,) in the bake frame, time s, radius m)
+    fields: list = field(default_factory=list)  # fields.FieldSpec (world) blowing during the step
+    wind_scale: float = 1.0         # m/s per unit of field strength
+    frame: int = 0                  # the scene frame (the fields' noise is drawn per frame)
+    to_world: np.ndarray = field(default_factory=lambda: np.eye(4))  # bake frame -> world now
     dynamics: dict = field(default_factory=dict)  # motion parameters that changed
     step: bool = True               # False on the last frame
     surfaces: list = field(default_factory=list)  # mesh igniters: (points (k, 3), radius m, time s)
@@ -80,8 +85,9 @@ class CoreWorker(threading.Thread):
     ("cancelled",).
     """
 
-    def __init__(self, make_simulation, dt: float, want_particles: bool):
+    def __init__(self, make_simulation, dt: float, want_particles: bool, shell: bool = False):
         super().__init__(name="thinburn-bake", daemon=True)
+        self._shell = shell
         self._make_simulation = make_simulation
         self._dt = float(dt)
         self._want_particles = want_particles
@@ -130,8 +136,27 @@ class CoreWorker(threading.Thread):
         if task.flames is not None:
             sim.set_fire_sources(*task.flames)
         if task.step:
-            sim.wind = task.wind
+            self._blow(sim, task, positions)
             if task.dynamics:
                 sim.set_dynamics(**task.dynamics)
             sim.step(self._dt)
         return ("frame", task.index, positions, lit, particles)
+
+    def _blow(self, sim, task: FrameTask, positions: np.ndarray) -> None:
+        """The force fields at the lattice's control vertices (each its own wind on the motion)
+        and their mean as the uniform wind (the fire front and the particles); without a
+        lattice, the fields at the sheet's centre. Evaluated in the world, turned into the bake
+        frame."""
+        if not task.fields:
+            sim.wind = (0.0, 0.0, 0.0)
+            return
+        F = task.to_world
+        if self._shell:
+            points = np.asarray(sim.lattice_positions(), dtype=np.float64).reshape(-1, 3)
+        else:
+            points = positions.mean(axis=0, keepdims=True)
+        world = fields.wind_at(task.fields, moving.to_world(F, points), task.frame) * task.wind_scale
+        local = moving.direction_to_bake(F, world)
+        if self._shell:
+            sim.set_wind_field(local)
+        sim.wind = tuple(float(c) for c in local.mean(axis=0))

@@ -19,8 +19,12 @@ namespace thinburn {
 enum class Integrator {
   Explicit,    ///< the paper's eqs 13-15: V = V0 + a dt, Pos = Pos0 + V dt + a dt^2 / 2
   Symplectic,  ///< symplectic Euler: V = V0 + a dt, Pos = Pos0 + V dt
-  Implicit     ///< backward Euler, one Newton step per substep, a linear solve each
+  Implicit,    ///< backward Euler (first order), one Newton step per substep, a linear solve each
+  Bdf2         ///< BDF2 (second order), one Newton step per substep, a linear solve each
 };
+
+/// @brief True for the integrators that solve a linear system per substep.
+inline bool is_implicit(Integrator i) { return i == Integrator::Implicit || i == Integrator::Bdf2; }
 
 /// @brief Preconditioner of the implicit integrator's conjugate gradients.
 enum class Preconditioner {
@@ -128,6 +132,9 @@ class LatticeDynamics {
   void set_floor_offsets(const Eigen::VectorXd& offsets);
   /// @brief Wind velocity, m/s.
   void set_wind(const Eigen::Vector3d& w);
+  /// @brief Wind velocity per control vertex ((2 M^2) x 3, m/s), used instead of set_wind's
+  /// uniform wind on the lattice; 0 rows: back to the uniform wind.
+  void set_wind_field(const RowMatX3& w);
   /// @brief Set positions and velocities ((2 M^2) x 3 each); everything wakes.
   void set_state(const RowMatX3& x, const RowMatX3& v);
 
@@ -148,6 +155,10 @@ class LatticeDynamics {
     Eigen::Vector3d wind;
     RowMatX3 grad_dir;
     Eigen::VectorXd grad_share;
+    RowMatX3 hist_x, hist_v;
+    std::vector<std::int64_t> hist_stamp;
+    std::int64_t substep_count;
+    double hist_h;
   };
   Checkpoint checkpoint() const;
   void rollback(Checkpoint&& c);
@@ -239,10 +250,27 @@ class LatticeDynamics {
   std::vector<int> inc_start_, inc_spring_, inc_other_;
   std::vector<int> vert_spring_;    // per couple: its top-bottom spring
   Eigen::VectorXd contact_;         // per vertex: floor impulse per mass of this substep, -1 if free
+  std::vector<std::uint8_t> stick_; // per vertex: a contact held by static friction this substep
+  // The implicit solve's filter (Baraff and Witkin's S): a contact's v_z, and a sticking
+  // contact's whole velocity, are prescribed; filter() zeroes those components of a 3-vector.
+  bool filtered(int v, int i) const { return contact_(v) >= 0.0 && (i == 2 || stick_[v]); }
+  void filter(int v, double* x3) const {
+    for (int i = 0; i < 3; ++i)
+      if (filtered(v, i)) x3[i] = 0.0;
+  }
   RowMatX3 vel_, drift_, disp_;
   RowMatX3 accel_;                  // last implicit acceleration per vertex: the CG warm start
+  // BDF2's history: each vertex's state at the start of the substep it last took part in, that
+  // substep's number and length. A vertex has history when that substep was the last one.
+  RowMatX3 hist_x_, hist_v_;
+  std::vector<std::int64_t> hist_stamp_;
+  std::int64_t substep_count_ = 0;
+  double hist_h_ = 0.0;
+  void forget_history() { substep_count_ += 2; }  // no vertex's stamp matches any more
+  double bdf2_ratio(double h) const;
   Eigen::VectorXd mass_, area_, heat_, heat_prev_, D_prev_, delta_;
   Eigen::Vector3d wind_{0, 0, 0};
+  RowMatX3 wind_field_;             // per vertex (set_wind_field), 0 rows: wind_ everywhere
   std::vector<std::uint8_t> pinned_, awake_, forced_;
   std::vector<std::uint16_t> hold_;  // steps a flickering sleeper still stays awake
   std::vector<std::uint16_t> hold_len_;  // the length of its last hold (doubles per flicker)

@@ -51,7 +51,9 @@ class ParticleSystem {
   /// Births per emitter are floor(e) plus one with probability frac(e), e the expected count.
   /// A particle is born at the emitter position jittered uniformly over a square of side
   /// `length` in the sheet's tangent plane, moving at birth_speed along +n if n.z >= 0 else -n
-  /// (both sides alternating when |n.z| < vertical_band).
+  /// (both sides alternating when |n.z| < vertical_band). Each is born at a uniform time within
+  /// the coming step: its age starts at minus that delay (in (-dt, 0]) and the next step(dt)
+  /// carries it through the rest of the step only.
   void emit(const RowMatX3& pos, const RowMatX3& normal, const Eigen::VectorXd& length, double dt);
 
   /// @brief Advance all live particles by dt in a wind (m/s): exact exponential integration of
@@ -85,7 +87,7 @@ class ParticleSystem {
   std::uint64_t steps() const { return steps_; }
 
  private:
-  void birth(const Eigen::Vector3d& p, const Eigen::Vector3d& n, double length);
+  void birth(const Eigen::Vector3d& p, const Eigen::Vector3d& n, double length, double dt);
   void compact();
 
   ParticleParams params_;

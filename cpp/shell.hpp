@@ -85,6 +85,8 @@ class Shell {
   void vertex_positions(RowMatX3& out) const;
 
   void set_dynamics_params(const DynamicsParams& p);
+  /// @brief Per-control-vertex wind for the motion (LatticeDynamics::set_wind_field).
+  void set_wind_field(const RowMatX3& w) { dynamics_->set_wind_field(w); }
 
   const FfdLattice& lattice() const { return *lattice_; }
   const LatticeDynamics& dynamics() const { return *dynamics_; }

@@ -535,7 +535,7 @@ struct Simulation::Saved {
 bool Simulation::step_may_throw() const {
   // Only an explicit integrator refuses a step (more than max_substeps needed); the implicit one
   // takes any step, so its frames never pay for a copy.
-  return shell_ && params_.dynamics.integrator != Integrator::Implicit;
+  return shell_ && !is_implicit(params_.dynamics.integrator);
 }
 
 Simulation::Saved Simulation::save() const {

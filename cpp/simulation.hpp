@@ -15,6 +15,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <stdexcept>
 #include <vector>
 
 namespace thinburn {
@@ -121,6 +122,13 @@ class Simulation {
   const RowMatX3& vertices() const { return vertices_; }
   const SimulationParams& params() const { return params_; }
   void set_wind(const Eigen::Vector3d& w) { wind_ = w; }
+  /// @brief Wind per control vertex for the sheet's motion (the lattice's (2 M^2) x 3 rows, as
+  /// lattice_positions; 0 rows: the uniform wind again). The fire and the particles keep the
+  /// uniform wind. Needs shell.
+  void set_wind_field(const RowMatX3& w) {
+    if (!shell_) throw std::invalid_argument("set_wind_field: this simulation has no shell");
+    shell_->set_wind_field(w);
+  }
   const Eigen::Vector3d& wind() const { return wind_; }
 
   std::vector<std::uint8_t> cell_states() const { return state_; }

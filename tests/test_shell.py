@@ -33,23 +33,24 @@ def _burn(seconds, **params):
 
 
 def test_a4_on_the_table_curls_in_place():
-    # Measured (cells=48, M=4, 40 s): centroid of the vertices moved 20.2 mm horizontally
-    # (-14.1, -14.5 mm, toward the lit corner), lattice centre of mass 24 mm; max z 0.125 m.
-    # With the paper's crumple (bimetal=False) the centroid moved 300 mm. The rest is the air
-    # drag (wind_drag, linear, 1 Pa s/m) on the rising curl rolling the curled sheet: see the
-    # next test. The bound is 25 mm, not the 20 mm aimed at (a known weakness, docs/dynamics.md).
+    # Measured (cells=48, M=4, 40 s): centroid of the vertices moved 0.74 mm horizontally
+    # (0.54, 0.51 mm); max z 48 mm. Over the whole burn (120 s, the front out): 0.13 mm. Issue
+    # #12 asks for at most 5 mm; the bound is 1.5 mm. It was 20.2 mm before static friction
+    # acted inside the implicit solve (docs/dynamics.md §3), and 300 mm with the paper's chord
+    # crumple (bimetal=False).
     sim, x, x0, _ = _burn(40.0)
     drift = np.linalg.norm((x - x0)[:, :2].mean(0))
-    assert drift < 0.025
+    assert drift < 0.0015
     assert x[:, 2].max() > 0.01
     assert np.all(np.isfinite(x))
 
 
-def test_a4_on_the_table_without_air_drag_stays_within_a_centimetre():
-    # Measured (40 s): centroid 6.1 mm (3.4, 5.0 mm), max z 0.125 m.
+def test_a4_on_the_table_without_air_drag_stays_put_too():
+    # Measured (40 s): centroid 0.73 mm (0.54, 0.49 mm), max z 48 mm (6.1 mm before static
+    # friction inside the solve).
     sim, x, x0, _ = _burn(40.0, wind_drag=0.0)
     drift = np.linalg.norm((x - x0)[:, :2].mean(0))
-    assert drift < 0.01
+    assert drift < 0.0015
     assert x[:, 2].max() > 0.01
 
 

@@ -314,16 +314,16 @@ def test_params_are_a_read_only_view_of_the_live_values(a4):
 def test_one_big_implicit_step_stays_within_reach_of_the_pin(dt):
     # Repro r4: cloth 1 m x 2 m pinned at a corner cannot reach farther than its diagonal
     # (2.24 m); it reached 2.65 m at dt = 1 s and 9.45 m at 10 s (edges stretched ~10x, one
-    # substep). An implicit step that ends with a spring overstretched is now redone with more
-    # substeps: measured 1.013, 1.005 and 0.963 diagonals at dt = 1, 2, 10 s (2, 6, 29
-    # substeps). At dt = 1/24 s it keeps 1.000.
+    # substep). An implicit step that ends with a spring overstretched (by 5 %) is now redone
+    # with more substeps: measured 0.962, 0.988 and 1.016 diagonals at dt = 1, 2, 10 s (14, 35,
+    # 176 substeps; worst spring strain 2.3, 3.8, 4.4 %). At dt = 1/24 s it keeps 1.000.
     v, f = rect_sheet(1.0, 2.0, nx=6, ny=11)
     sim = thinburn.Simulation(v, f, material="cloth", cells=16, pinned=[0])
     sim.step(dt)
     p = sim.vertex_positions()
     assert np.linalg.norm(p - p[0], axis=1).max() <= 1.02 * np.hypot(1.0, 2.0)
     stats = sim.step_stats()
-    assert stats["stretch_redos"] >= 1 and stats["substeps"] > 1 and stats["max_strain"] < 0.25
+    assert stats["stretch_redos"] >= 1 and stats["substeps"] > 1 and stats["max_strain"] < 0.05
 
 
 def test_a_curtain_falls_back_below_its_pins_when_the_wind_stops():
@@ -341,3 +341,43 @@ def test_a_curtain_falls_back_below_its_pins_when_the_wind_stops():
     sim.wind = (0.0, 0.0, 0.0)
     sim.run(5.0, dt=1 / 24)
     assert sim.vertex_positions()[bot, 2].mean() < 1.45 - 0.7
+
+
+def _swinging_cloth(integrator, dt, T=1.0):
+    """A 0.4 m cloth pinned at two corners, released flat: 1 s of swinging, no fire."""
+    v, f = rect_sheet(0.4, 0.4, nx=21, ny=21)
+    sim = thinburn.Simulation(v, f, material="cloth", cells=32, pinned=[0, 20], threads=1, lattice=5)
+    sim.set_dynamics(integrator=integrator, substeps=1, sleeping=False)
+    sim.run(T, dt=dt)
+    return sim.vertex_positions()
+
+
+def test_both_implicit_integrators_converge_in_dt_to_one_motion():
+    """The order of convergence in dt, against a dt = 1/3840 s reference. The stiff stretch
+    modes (w dt >> 1) keep both below their nominal order at frame-sized steps (order
+    reduction). Measured max vertex errors at dt = 1/24..1/192: backward Euler 38, 16, 5.9,
+    2.1 mm (orders 1.26, 1.42, 1.48); BDF2 25, 9.2, 3.2, 1.2 mm (1.47, 1.54, 1.46)."""
+    ref = _swinging_cloth("bdf2", 1 / 3840)
+    dts = [1 / 24, 1 / 48, 1 / 96, 1 / 192]
+    err = {i: np.array([np.abs(_swinging_cloth(i, dt) - ref).max() for dt in dts])
+           for i in ("implicit", "bdf2")}
+    for name, lo, hi in (("implicit", 1.15, 1.6), ("bdf2", 1.35, 1.65)):
+        orders = np.log2(err[name][:-1] / err[name][1:])
+        assert np.all((orders > lo) & (orders < hi)), (name, orders)
+    assert np.all(err["bdf2"] < 0.75 * err["implicit"])  # measured 0.54-0.67
+
+
+def test_fig9_cloth_held_at_its_corners_sinks_as_it_burns():
+    """Fig. 9: the demo's 40 cm cloth held at its corners, lit in the middle, sinks once burnt
+    cells have lost their mass and most of their strength. Lowest point after 8 s (the sag has
+    settled; unlit it does not move by a bit from 8 to 90 s) and after the whole burn (90 s):
+    233.1 -> 230.5 mm measured, 2.65 mm down (it used to rise, 270 -> 288 mm)."""
+    scene = default_scene("cloth")
+    sim = thinburn.Simulation(scene.vertices, scene.faces, material="cloth", cells=48,
+                              floor=scene.floor, pinned=scene.pinned, **scene.params)
+    sim.ignite(scene.vertices.mean(0), time=0.0, radius=0.01)
+    sim.run(8.0, dt=1 / 24)
+    before = sim.vertex_positions()[:, 2].min()
+    sim.run(82.0, dt=1 / 24)
+    assert np.mean(sim.vertex_char() > 0.5) == 1.0  # all burnt
+    assert before - sim.vertex_positions()[:, 2].min() > 0.002

@@ -24,7 +24,8 @@ Integrator parse_integrator(const py::handle& h) {
   if (s == "explicit") return Integrator::Explicit;
   if (s == "symplectic") return Integrator::Symplectic;
   if (s == "implicit") return Integrator::Implicit;
-  throw std::invalid_argument("integrator must be 'explicit', 'symplectic' or 'implicit', got '" +
+  if (s == "bdf2") return Integrator::Bdf2;
+  throw std::invalid_argument("integrator must be 'implicit', 'bdf2', 'symplectic' or 'explicit', got '" +
                               s + "'");
 }
 
@@ -92,7 +93,7 @@ void apply_kwargs(DynamicsParams& p, const py::kwargs& kw) {
 }
 
 py::dict params_dict(const DynamicsParams& p) {
-  const char* names[] = {"explicit", "symplectic", "implicit"};
+  const char* names[] = {"explicit", "symplectic", "implicit", "bdf2"};
   const char* preconditioners[] = {"auto", "ldlt", "jacobi"};
   return py::dict("k_structure"_a = p.k_structure, "k_shear"_a = p.k_shear, "k_flex"_a = p.k_flex,
                   "k_thickness"_a = p.k_thickness, "k_transverse"_a = p.k_transverse,
@@ -141,7 +142,8 @@ void define_dynamics(py::module_& m) {
   py::enum_<Integrator>(m, "Integrator", "Time integrator of the lattice.")
       .value("Explicit", Integrator::Explicit, "The paper's eqs 13-15.")
       .value("Symplectic", Integrator::Symplectic, "Symplectic Euler.")
-      .value("Implicit", Integrator::Implicit, "Backward Euler, a linear solve per substep.");
+      .value("Implicit", Integrator::Implicit, "Backward Euler (first order), a linear solve per substep.")
+      .value("Bdf2", Integrator::Bdf2, "BDF2 (second order), a linear solve per substep.");
 
   py::class_<StepStats>(m, "StepStats", "What one step did.")
       .def_readonly("substeps", &StepStats::substeps)

@@ -144,6 +144,7 @@ void define_simulation(py::module_& m) {
       .def_property_readonly("params", [](const S& s) { return s.params(); },
                              "A copy of the parameters in force now.")
       .def_property("wind", &S::wind, &S::set_wind)
+      .def("set_wind_field", &S::set_wind_field, py::arg("wind"))
       .def_property_readonly("geometry", [](const S& s) { return geometry_name(s.geometry()); })
       .def_property_readonly("cells", [](const S& s) { return s.geometry() == Geometry::Plane ? s.sheet().cells() : s.params().cells; })
       .def_property_readonly("num_cells", &S::num_cells)

@@ -12,7 +12,7 @@ from .materials import IGNITION_TEMPERATURE, Material, resolve_material
 
 FRONT_METHODS = ("cellular", "cellular16", "fmm1", "fmm")
 
-INTEGRATORS = ("implicit", "symplectic", "explicit")
+INTEGRATORS = ("implicit", "bdf2", "symplectic", "explicit")
 # Where the cells and the lattice live (docs/surface_front.md, "Which cells"): "plane", the
 # paper's N x N grid over the rest plane (or the UV map) and an M x M lattice; "surface", cells
 # on the surface itself and a lattice on a control surface fitted to it; "auto", the plane for
@@ -66,8 +66,8 @@ _PARAM_BOUNDS = {
 }
 # Eq 2's Ct for the cells' temperature when heat ignites, m²/s (docs/heat.md, "Heat ignites"):
 # calibrated on two 15 cm paper sheets, the lower lit at its centre (scripts/heat_ignition.py,
-# 32 cells): the upper one catches fire 1.4 s later 1 cm above it, 2.4 s later 3 cm above, not
-# in 8 s 10 cm above (182 K at most), and 50 cm above it warms by 2.4 K. The particles' heat
+# 32 cells): the upper one catches fire 1.3 s later 1 cm above it, 2.3 s later 3 cm above, not
+# in 8 s 10 cm above (189 K at most), and 50 cm above it warms by 2.8 K. The particles' heat
 # scales with their birth rate (docs/heat.md): change this with particle_birth_rate.
 IGNITION_GAIN = 2e-4
 
@@ -105,8 +105,9 @@ class Simulation:
         0 and 1 is ambiguous (mask or indices?) and raises ValueError: pass ``mask.astype(bool)``
         or ``np.flatnonzero(mask)``.
     floor : None or the height (m) of a horizontal floor with friction under the sheet.
-    integrator : "implicit" (backward Euler, the default), "symplectic" or "explicit" (the
-        paper's eqs 13-15); explicit ones substep as stability needs or raise.
+    integrator : "implicit" (backward Euler, first order, the default), "bdf2" (second order,
+        docs/dynamics.md §4), "symplectic" or "explicit" (the paper's eqs 13-15); explicit ones
+        substep as stability needs or raise.
     shell : False switches the paper's §4 off: no lattice, particles or motion; the sheet keeps
         its rest shape and only the fire runs.
     finish_within : None (the material's speed) or seconds > 0: every cell the fire can reach
@@ -375,6 +376,28 @@ class Simulation:
             raise ValueError(f"wind: |wind| = {np.linalg.norm(w):.3g} m/s exceeds {MAX_WIND:g} m/s "
                              "(the model's drag and particles overflow far above it)")
         self._sim.wind = w
+
+    def set_wind_field(self, wind) -> None:
+        """Wind per lattice control vertex for the sheet's motion, m/s: an array shaped as
+        ``lattice_positions()`` ((M, M, 2, 3); (couples, 2, 3) on a surface), used instead of
+        ``wind`` by the lattice's wind drag until set again; None: the uniform ``wind`` again.
+        The fire front and the fire particles keep the uniform ``wind``."""
+        self._require_shell("set_wind_field")
+        n = 2 * self._sim.lattice_couples
+        if wind is None:
+            self._sim.set_wind_field(np.zeros((0, 3)))
+            return
+        w = np.asarray(wind, dtype=np.float64)
+        if w.size != 3 * n or w.shape[-1] != 3:
+            raise ValueError(f"wind field: expected one (x, y, z) per control vertex, shaped like "
+                             f"lattice_positions() ({n} vectors), got shape {w.shape}")
+        w = w.reshape(n, 3)
+        if not np.all(np.isfinite(w)):
+            raise ValueError("wind field: every value must be finite")
+        fastest = float(np.linalg.norm(w, axis=1).max()) if n else 0.0
+        if fastest > MAX_WIND:
+            raise ValueError(f"wind field: |wind| = {fastest:.3g} m/s exceeds {MAX_WIND:g} m/s")
+        self._sim.set_wind_field(np.ascontiguousarray(w))
 
     @property
     def threads(self) -> int:

@@ -283,12 +283,12 @@ def _panel_text(addon, obj) -> str:
     return " ".join(d[len("label: "):] for d in drawn if d.startswith("label: "))
 
 
-def test_the_panel_warns_of_an_animated_sheet_and_of_wind_settings_it_ignores(addon):
+def test_the_panel_warns_of_a_floor_under_a_moving_sheet_and_of_fields_it_ignores(addon):
     # Issue #14: an animated sheet never burnt, and a Wind field's falloff and noise were
-    # ignored, and nothing said so.
+    # ignored. Both are used now; what is left is said: a Floor the motion may not allow,
+    # a field shape and field kinds that do not blow on sheets.
     sheet = make_sheet()
     sheet.thinburn.enabled = True
-    assert "ignore" not in _panel_text(addon, sheet)  # a still sheet, no wind: nothing to say
     sheet.keyframe_insert("location", frame=1)
     bpy.ops.object.effector_add(type="WIND")
     wind = bpy.context.active_object
@@ -297,11 +297,21 @@ def test_the_panel_warns_of_an_animated_sheet_and_of_wind_settings_it_ignores(ad
     wind.field.falloff_power = 1.5
     bpy.ops.object.effector_add(type="TURBULENCE")
     bpy.context.active_object.name = "Gusts"
+    assert addon.panels.sheet_warnings(bpy.context, sheet) == []  # all of it is used
+    sheet.thinburn.floor_mode = "HEIGHT"
+    wall = make_sheet("Wall")  # a mesh's own field can blow from its surface: not used
+    bpy.ops.object.forcefield_toggle()  # on the active object, the wall
+    wall.field.type = "WIND"
+    wall.field.shape = "SURFACE"
+    bpy.context.view_layer.objects.active = sheet
+    bpy.ops.object.effector_add(type="VORTEX")
+    bpy.context.active_object.name = "Swirl"
     text = " ".join(_panel_text(addon, sheet).split())
-    assert "'Sheet' moves in the scene (its location (animated))" in text
-    assert "Keep the sheet still" in text
-    assert "Wind 'Breeze': its Falloff (Sphere, power 1.5), Noise (2) are ignored" in text
-    assert "'Gusts' (a Turbulence field) does not act on ThinBurn sheets" in text
+    assert "'Sheet' moves in the scene (its location (animated)) and has a Floor" in text
+    assert "set Floor to None" in text
+    assert "Wind 'Wall': its Shape (Surface) is not used" in text
+    assert "'Swirl' (a Vortex field) does not act on ThinBurn sheets" in text
+    assert "Gusts" not in text
 
 
 def test_settings_speak_an_artists_words_and_keep_the_papers_in_tooltips(addon):

@@ -173,8 +173,9 @@ def test_wind_is_read_per_frame(addon, tmp_path):
     assert winds == [wind.name]
     at1 = inputs.sample_frame(bpy.context.scene, 1, sheet.name, ["Igniter"], winds)
     at3 = inputs.sample_frame(bpy.context.scene, 3, sheet.name, ["Igniter"], winds)
-    np.testing.assert_allclose(at1.wind, (1.0, 0.0, 0.0), atol=1e-6)
-    np.testing.assert_allclose(at3.wind, (3.0, 0.0, 0.0), atol=1e-6)
+    centre = np.array([[0.0, 0.0, 0.5]])
+    np.testing.assert_allclose(at1.wind_at(centre), [(1.0, 0.0, 0.0)], atol=1e-6)
+    np.testing.assert_allclose(at3.wind_at(centre), [(3.0, 0.0, 0.0)], atol=1e-6)
     assert at1.igniters[0][1] == 1.0
 
 
