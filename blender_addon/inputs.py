@@ -29,6 +29,8 @@ class FrameSample:
     wind_scale: float
     dynamics: dict  # the keyframeable motion parameters and the scene's gravity (world)
     matrix: np.ndarray  # the sheet's matrix_world (4, 4)
+    surfaces: list = None  # each lit mesh igniter's (world surface points (k, 3), radius)
+    flames: list = None    # each lit Flame igniter's (world position (3,), flame width m)
 
     def wind_at(self, points) -> np.ndarray:
         """(n, 3) wind in m/s at world points: the fields times the sheet's Wind Scale."""
@@ -109,17 +111,108 @@ def floor_height(scene, settings):
     return None
 
 
+def flame_igniters(igniters: list) -> list:
+    """The igniters (names) that are Flames: they burn on their own."""
+    return [n for n in igniters if bpy.data.objects[n].thinburn_igniter.kind == "FLAME"]
+
+
 def igniter_objects(obj, settings) -> list:
-    """The igniters of a sheet (names), or a BakeError that says what to do."""
+    """The igniters of a sheet (names), or a BakeError that says what to do. A sheet lit by
+    its Ignite map needs none."""
     coll = settings.igniter_collection
+    painted = bool(settings.ignite_map)
     if coll is None:
+        if painted:
+            return []
         raise BakeError(f"no igniters: set an Igniter collection on '{obj.name}' "
-                        "(Physics > ThinBurn) and put an Empty in it")
+                        "(Physics > ThinBurn) and put an Empty or a mesh in it, or paint where "
+                        "it starts (Physics > ThinBurn > Painted > Ignite)")
     names = [o.name for o in coll.all_objects if o.name != obj.name]
-    if not names:
+    if not names and not painted:
         raise BakeError(f"no igniters: the collection '{coll.name}' is empty; add an Empty "
-                        "and keyframe its ThinBurn Igniter strength")
+                        "or a mesh and keyframe its ThinBurn Igniter strength")
     return names
+
+
+# --- painted maps ---------------------------------------------------------------------------------
+MAP_LABELS = {"speed_map": "Speed", "fuel_map": "Fuel", "ignite_map": "Ignite"}
+
+
+def vertex_map(obj, settings, key: str):
+    """(n,) float values of a painted map (a vertex group's weights, unassigned vertices 0, or
+    a float attribute on the vertices), or None when the map is not set."""
+    name = getattr(settings, key)
+    if not name:
+        return None
+    label = MAP_LABELS[key]
+    mesh = obj.data
+    n = len(mesh.vertices)
+    if getattr(settings, key + "_from") == "GROUP":
+        group = obj.vertex_groups.get(name)
+        if group is None:
+            raise BakeError(f"{label} map: '{name}' is not a vertex group of '{obj.name}': pick one "
+                            "in Physics > ThinBurn > Painted, or switch it to Attribute")
+        values = np.zeros(n)
+        index = group.index
+        for v in mesh.vertices:
+            for g in v.groups:
+                if g.group == index:
+                    values[v.index] = g.weight
+        return values
+    attr = mesh.attributes.get(name)
+    if attr is None:
+        raise BakeError(f"{label} map: '{obj.name}' has no attribute '{name}': pick one in "
+                        "Physics > ThinBurn > Painted, or switch it to Vertex Group")
+    if attr.domain != "POINT" or attr.data_type not in {"FLOAT", "INT", "BOOLEAN"}:
+        raise BakeError(f"{label} map: attribute '{name}' holds {attr.data_type.lower()} values on "
+                        f"the {attr.domain.lower()} domain; paint a Float attribute on vertices (Point)")
+    field = "value"
+    raw = np.zeros(n, dtype=np.float64 if attr.data_type == "FLOAT" else
+                   (np.int32 if attr.data_type == "INT" else bool))
+    attr.data.foreach_get(field, raw)
+    values = raw.astype(np.float64)
+    if not np.all(np.isfinite(values)) or (values < 0).any():
+        bad = values[~np.isfinite(values) | (values < 0)][0]
+        raise BakeError(f"{label} map: attribute '{name}' holds {bad:g}; paint values of 0 "
+                        "(never burns) or more (1: the material's own)")
+    return values
+
+
+def surface_points(obj, spacing: float, limit: int = 200_000) -> np.ndarray:
+    """(k, 3) world points on a mesh igniter's faces, at most about ``spacing`` apart (its
+    vertices and points spread over each triangle), so that the cells within an igniter's
+    radius of its surface are those within that radius of a point, to within spacing."""
+    mesh = obj.data
+    n = len(mesh.vertices)
+    co = np.empty(3 * n)
+    mesh.vertices.foreach_get("co", co)
+    mw = np.array(obj.matrix_world, dtype=np.float64)
+    world = co.reshape(n, 3) @ mw[:3, :3].T + mw[:3, 3]
+    mesh.calc_loop_triangles()
+    tris = np.empty(3 * len(mesh.loop_triangles), dtype=np.int32)
+    mesh.loop_triangles.foreach_get("vertices", tris)
+    tris = tris.reshape(-1, 3)
+    out = [world]
+    if len(tris) and spacing > 0:
+        a, b, c = (world[tris[:, k]] for k in range(3))
+        longest = np.max([np.linalg.norm(b - a, axis=1), np.linalg.norm(c - b, axis=1),
+                          np.linalg.norm(a - c, axis=1)], axis=0)
+        splits = np.ceil(longest / spacing).astype(int)
+        total = len(world)
+        for m in np.unique(splits[splits > 1]):
+            sel = splits == m
+            i, j = np.meshgrid(np.arange(m + 1), np.arange(m + 1), indexing="ij")
+            keep = (i + j) <= m
+            wb, wc = i[keep] / m, j[keep] / m
+            wa = 1.0 - wb - wc
+            pts = (wa[None, :, None] * a[sel][:, None] + wb[None, :, None] * b[sel][:, None]
+                   + wc[None, :, None] * c[sel][:, None]).reshape(-1, 3)
+            total += len(pts)
+            if total > limit:
+                raise BakeError(f"igniter '{obj.name}' is too large for its fire cells ({total} "
+                                "points to test): use a smaller igniter mesh or lower Fire Detail")
+            out.append(pts)
+    return np.concatenate(out)
 
 
 FIELD_KINDS = ("WIND", "TURBULENCE")  # the force fields that blow on a sheet
@@ -221,9 +314,11 @@ def wind_warnings(view_layer) -> list:
     return out
 
 
-def sample_frame(scene, frame: int, sheet_name: str, igniters: list, winds: list) -> FrameSample:
+def sample_frame(scene, frame: int, sheet_name: str, igniters: list, winds: list,
+                 spacing: float = 0.0) -> FrameSample:
     """Move the scene to ``frame`` and read the igniters, the force fields and the sheet's
-    transform.
+    transform. Empties (any object but a mesh) light around their origin; mesh igniters around
+    their surface, sampled ``spacing`` apart; Flames burn on their own at their origin.
 
     frame_set evaluates the scene and writes animated values and world matrices back to the
     original objects (those of the active depsgraph), which is what is read here.
@@ -233,17 +328,25 @@ def sample_frame(scene, frame: int, sheet_name: str, igniters: list, winds: list
     for name in (sheet_name, *igniters, *winds):
         if objects.get(name) is None:
             raise BakeError(f"'{name}' was deleted or renamed during the bake")
-    samples = []
+    samples, surfaces, flames = [], [], []
     for name in igniters:
         ob = objects[name]
         ig = ob.thinburn_igniter
+        if ig.kind == "FLAME":  # burns on its own: fire particles from its origin while lit
+            if ig.strength > 0.0:
+                flames.append((np.array(ob.matrix_world.translation, dtype=np.float64), 2.0 * float(ig.radius)))
+            continue
+        if ob.type == "MESH":  # its surface lights the cells within its radius while lit
+            if ig.strength > 0.0:
+                surfaces.append((surface_points(ob, spacing), float(ig.radius)))
+            continue
         samples.append((np.array(ob.matrix_world.translation, dtype=np.float64),
                         float(ig.strength), float(ig.radius)))
     sheet = objects[sheet_name]
     settings = sheet.thinburn
     return FrameSample(frame, samples, [field_spec(objects[name]) for name in winds],
                        float(settings.wind_scale), dynamics(scene, settings),
-                       np.array(sheet.matrix_world, dtype=np.float64))
+                       np.array(sheet.matrix_world, dtype=np.float64), surfaces, flames)
 
 
 def dynamics(scene, settings) -> dict:

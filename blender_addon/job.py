@@ -122,6 +122,7 @@ class BakeJob:
         self.dt = 1.0 / self.fps
         self.igniters = inputs.igniter_objects(obj, settings)
         self.winds = inputs.wind_objects(context.view_layer)
+        self.flames = inputs.flame_igniters(self.igniters)
         self.frame_restore = self.scene.frame_current
         # The sheet's rest state (its transform, the floor) is read at the first frame.
         self.scene.frame_set(self.frames[0])
@@ -163,6 +164,11 @@ class BakeJob:
         self.message = ""
         # What the bake ignores, in an artist's words (the report shows them).
         self.warnings = inputs.wind_warnings(context.view_layer)
+        if self.flames and not settings.heat_ignites:
+            self.warnings.append(
+                f"{', '.join(repr(n) for n in self.flames)} {'is a Flame' if len(self.flames) == 1 else 'are Flames'}: "
+                f"its heat bends '{obj.name}' but sets it alight only with Heat Ignites on "
+                "(Physics > ThinBurn)")
         if self.n_vertices < (settings.cells / 4) ** 2:
             # The char, the glow and the motion live on the vertices (the fire's cells do not
             # show between them), and the bake reads the mesh before its modifiers.
@@ -198,6 +204,29 @@ class BakeJob:
             if not core_supports("pinned"):
                 raise BakeError("this thinburn core cannot pin vertices yet: clear the Pin Group")
             kwargs["pinned"] = inputs.pin_mask(obj, settings.pin_group)
+        if self.flames and not self.shell:
+            raise BakeError(f"the Flame igniter {', '.join(repr(n) for n in self.flames)} burns as "
+                            "fire particles, which need Crumple on: tick Crumple, or set its Kind "
+                            "to Lights What It Touches")
+        if settings.heat_ignites:
+            if not self.shell:
+                raise BakeError("Heat Ignites needs Crumple on (the heat comes from the fire's "
+                                "particles): tick Crumple, or untick Heat Ignites")
+            kwargs["heat_ignites"] = True
+        if settings.burn_duration > 0:
+            kwargs["finish_within"] = float(settings.burn_duration)
+        for key in ("speed_map", "fuel_map"):
+            values = inputs.vertex_map(obj, settings, key)
+            if values is not None:
+                kwargs[key] = values
+        self.ignite_values = inputs.vertex_map(obj, settings, "ignite_map")
+        self.ignite_index = None
+        if self.ignite_values is not None:
+            if not settings.frame_start <= settings.ignite_frame <= settings.frame_end:
+                raise BakeError(f"Ignite Frame {settings.ignite_frame} is outside the bake's frames "
+                                f"{settings.frame_start}–{settings.frame_end}: set it in Physics > "
+                                "ThinBurn > Painted")
+            self.ignite_index = settings.ignite_frame - settings.frame_start
         floor = inputs.floor_height(self.scene, settings)
         if floor is not None:
             if not core_supports("floor"):
@@ -264,7 +293,7 @@ class BakeJob:
             while self.next_sample <= need:
                 frame = self.frames[self.next_sample]
                 sample = inputs.sample_frame(self.scene, frame, self.obj_name, self.igniters,
-                                             self.winds)
+                                             self.winds, self.spacing)
                 self.samples[self.next_sample] = sample
                 self._follow(self.next_sample, sample)
                 self.next_sample += 1
@@ -302,9 +331,21 @@ class BakeJob:
             now["gravity"] = tuple(float(g) for g in moving.direction_to_bake(F, now["gravity"]))
             changed = {key: v for key, v in now.items() if self.dynamics.get(key) != v}
             self.dynamics.update(changed)
+        # A mesh igniter lights the cells within its radius of its surface (at least the
+        # surface's sampling, half a cell, so that radius 0 still touches the sheet); its points
+        # and the Flames' positions go into the bake frame as the Empties' do.
+        surfaces = [(moving.to_bake(F, pts), max(radius, self.spacing), k * self.dt)
+                    for pts, radius in (here.surfaces or [])]
+        flames = None
+        if self.flames:  # every frame, so a Flame that goes out stops emitting
+            lit = here.flames or []
+            flames = (moving.to_bake(F, np.array([p for p, _ in lit], dtype=np.float64).reshape(-1, 3)),
+                      np.array([w for _, w in lit], dtype=np.float64))
+        painted = self.ignite_values if k == self.ignite_index else None
         return FrameTask(index=k, ignitions=ignitions, fields=here.fields,
                          wind_scale=here.wind_scale, frame=here.frame, to_world=F,
-                         dynamics=changed, step=not last)
+                         dynamics=changed, step=not last, surfaces=surfaces, painted=painted,
+                         flames=flames)
 
     @staticmethod
     def _in_bake_frame(igniter, F):

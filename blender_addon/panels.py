@@ -44,6 +44,10 @@ class PHYSICS_PT_thinburn(ThinBurnPhysicsPanel, bpy.types.Panel):
         row.active = settings.crumple and job.core_supports("lattice")
         row.prop(settings, "lattice")
         layout.prop(settings, "crumple")
+        row = layout.row()
+        row.active = settings.crumple
+        row.prop(settings, "heat_ignites")
+        layout.prop(settings, "burn_duration")
         layout.prop(settings, "igniter_collection")
         layout.prop(settings, "wind_scale")
         layout.operator("thinburn.quick_burn", icon="LIGHT_SUN")
@@ -87,6 +91,29 @@ class PHYSICS_PT_thinburn_motion(ThinBurnPhysicsPanel, bpy.types.Panel):
         for key in DYNAMIC_PARAMS:
             layout.prop(settings, key)
         layout.label(text="Gravity: the scene's (Scene > Gravity)", icon="INFO")
+
+
+class PHYSICS_PT_thinburn_painted(ThinBurnPhysicsPanel, bpy.types.Panel):
+    bl_label = "Painted"
+    bl_parent_id = "PHYSICS_PT_thinburn"
+    bl_options = {"DEFAULT_CLOSED"}
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        obj = context.object
+        settings = obj.thinburn
+        layout.active = settings.enabled
+        for key in ("speed_map", "fuel_map", "ignite_map"):
+            col = layout.column(align=True)
+            col.prop(settings, key + "_from", text=inputs.MAP_LABELS[key] + " From")
+            if getattr(settings, key + "_from") == "GROUP":
+                col.prop_search(settings, key, obj, "vertex_groups")
+            else:
+                col.prop_search(settings, key, obj.data, "attributes")
+        row = layout.row()
+        row.active = bool(settings.ignite_map)
+        row.prop(settings, "ignite_frame")
 
 
 class PHYSICS_PT_thinburn_hold(ThinBurnPhysicsPanel, bpy.types.Panel):
@@ -217,11 +244,13 @@ class OBJECT_PT_thinburn_igniter(bpy.types.Panel):
         layout = self.layout
         layout.use_property_split = True
         igniter = context.object.thinburn_igniter
+        layout.prop(igniter, "kind")
         layout.prop(igniter, "strength")
         layout.prop(igniter, "radius")
 
 
-CLASSES = (PHYSICS_PT_thinburn, PHYSICS_PT_thinburn_motion, PHYSICS_PT_thinburn_hold,
+CLASSES = (PHYSICS_PT_thinburn, PHYSICS_PT_thinburn_painted, PHYSICS_PT_thinburn_motion,
+           PHYSICS_PT_thinburn_hold,
            PHYSICS_PT_thinburn_cache, PHYSICS_PT_thinburn_fire,
            PHYSICS_PT_thinburn_advanced, OBJECT_PT_thinburn_igniter)
 

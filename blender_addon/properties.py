@@ -18,7 +18,7 @@ MATERIAL_FIELDS = {
     "mass": ("Mass", "Areal density in Table 1's unit of 0.1 kg/m² (paper 0.45 = 45 g/m²)", 0.001, 100.0),
     "V0": ("Spread Speed", "How fast the fire spreads over a flat, level sheet, mm/s (Table 1, V0 of eq. 1)", 0.001, 1000.0),
     "Cv": ("Slows on Curves", "How much a curved or tilted sheet slows the fire: V = V0·(1 − Cv·grad²) (the paper's slope factor Cv, eq. 1)", 0.0, 10.0),
-    "burn_duration": ("Burn Duration", "Seconds a cell keeps burning after the front reaches it", 0.01, 600.0),
+    "burn_duration": ("Burn Time per Cell", "Seconds a spot of the sheet keeps burning after the front reaches it (a fire cell's burn duration)", 0.01, 600.0),
     "speed_noise": ("Speed Noise", "Random per-cell jitter of the spread speed, relative; breaks up grid-aligned fronts", 0.0, 0.9),
     "duration_noise": ("Duration Noise", "Random per-cell jitter of the burn duration, relative", 0.0, 0.9),
     "ash_fraction": ("Ash Fraction", "Share of its mass a burnt cell keeps as ash", 0.0, 1.0),
@@ -45,6 +45,11 @@ MODEL_PARAMS = {
     "wind_spread": ("Wind Spread", "Extra push on the front per m/s of wind along the sheet", 0.0, 0.0, 100.0),
     "max_drive": ("Climb and Wind Limit", "Caps how much Climb and Wind Spread speed up the fire one way, so the fire never stalls on the other (the core's max_drive)", 0.9, 0.0, 0.95),
 }
+
+
+# Where a painted map comes from (Physics > ThinBurn > Painted).
+MAP_SOURCES = [("GROUP", "Vertex Group", "Weights painted in Weight Paint mode (unassigned vertices: 0)", 0),
+               ("ATTRIBUTE", "Attribute", "A Float attribute on the vertices (Point domain)", 1)]
 
 
 def _describe(name: str, m) -> str:
@@ -164,10 +169,48 @@ class ThinBurnSettings(bpy.types.PropertyGroup):
                ("cellular", "Cellular", "The paper's 8-neighbour cellular rule", 2),
                ("cellular16", "Cellular 16", "A 16-neighbour cellular rule: rounder fronts", 3)])
 
+    speed_map: StringProperty(
+        name="Speed", default="", options=STATIC,
+        description="Painted spread speed: the fire runs this many times the material's speed "
+                    "where painted (1: as the material says, 2: twice as fast, 0: a firebreak "
+                    "that never burns; a vertex group's unassigned vertices are 0). Multiplies "
+                    "V0 of eq. 1 per cell")
+    speed_map_from: EnumProperty(items=MAP_SOURCES, name="Speed From", default="GROUP", options=STATIC,
+                                 description="Where the Speed map is painted")
+    fuel_map: StringProperty(
+        name="Fuel", default="", options=STATIC,
+        description="Painted fuel: flames stay this many times longer where painted (1: the "
+                    "material's Burn Time per Cell, 0: nothing to burn, a firebreak; a vertex "
+                    "group's unassigned vertices are 0)")
+    fuel_map_from: EnumProperty(items=MAP_SOURCES, name="Fuel From", default="GROUP", options=STATIC,
+                                description="Where the Fuel map is painted")
+    ignite_map: StringProperty(
+        name="Ignite", default="", options=STATIC,
+        description="Painted ignition: wherever this map is 0.5 or more catches fire at the "
+                    "Ignite Frame (no igniter needed)")
+    ignite_map_from: EnumProperty(items=MAP_SOURCES, name="Ignite From", default="GROUP",
+                                  options=STATIC, description="Where the Ignite map is painted")
+    ignite_frame: IntProperty(
+        name="Ignite Frame", default=1, min=0, options=STATIC,
+        description="The frame the Ignite map lights the sheet (within the bake's Start to End)")
+    burn_duration: FloatProperty(
+        name="Burn Duration", default=0.0, min=0.0, soft_max=600.0, subtype="TIME_ABSOLUTE",
+        unit="TIME_ABSOLUTE", options=STATIC,
+        description="Seconds from the first flame until the whole sheet has burnt (or the fire "
+                    "has stopped at a firebreak), whatever the sheet's curl does: the bake speeds "
+                    "the fire up or slows it down to fit. 0: the material's own speed")
+
+    heat_ignites: BoolProperty(
+        name="Heat Ignites", default=False, options=STATIC,
+        description="Parts of this mesh that are not yet burning catch fire when the flames' heat "
+                    "(eq. 2, at each fire cell) passes the material's ignition temperature: fire "
+                    "jumps gaps and climbs a stack of sheets made as one mesh. Needs Crumple")
+
     igniter_collection: PointerProperty(
         name="Igniters", type=bpy.types.Collection, options=STATIC,
-        description="Objects in this collection (usually Empties) light the sheet where their "
-                    "ThinBurn Igniter strength is above 0; cells within the igniter's radius catch fire")
+        description="Objects in this collection light the sheet while their ThinBurn Igniter "
+                    "strength is above 0: an Empty lights the cells within its radius of its "
+                    "origin, a mesh (a match, a candle flame) those within its radius of its surface")
     wind_scale: FloatProperty(
         name="Wind Scale", default=1.0, min=0.0, soft_max=10.0,
         description="Wind speed in m/s per unit of a Wind force field's strength. The scene's Wind "
@@ -279,9 +322,18 @@ class ThinBurnIgniter(bpy.types.PropertyGroup):
         description="1 lights the sheet, 0 puts the igniter out (any value above 0 is lit; the "
                     "igniter's strength): cells within its radius catch fire at that frame. "
                     "Keyframe it to light the sheet at a chosen time")
+    kind: EnumProperty(
+        name="Kind", default="LIGHT", options=STATIC,
+        description="What the igniter does while Lit",
+        items=[("LIGHT", "Lights What It Touches", "Cells within its Radius catch fire (a match, "
+                 "a torch): of an Empty's origin, of a mesh's surface", 0),
+               ("FLAME", "Flame", "A flame that burns on its own (a candle, a burner): it emits fire "
+                "particles from its origin, a flame twice its Radius wide, whose heat bends the "
+                "sheet and, with the sheet's Heat Ignites, sets it alight", 1)])
     radius: FloatProperty(
         name="Radius", default=0.02, min=0.0, soft_max=1.0, subtype="DISTANCE", unit="LENGTH",
-        description="Cells within this distance of the igniter catch fire (0: the nearest cell)")
+        description="Cells within this distance of the igniter catch fire: of an Empty's origin "
+                    "(0: the nearest cell), of a mesh igniter's surface (0: half a fire cell)")
 
 
 CLASSES = (ThinBurnBakedFile, ThinBurnBakedObject, ThinBurnSettings, ThinBurnIgniter)

@@ -30,6 +30,9 @@ class FrameTask:
     to_world: np.ndarray = field(default_factory=lambda: np.eye(4))  # bake frame -> world now
     dynamics: dict = field(default_factory=dict)  # motion parameters that changed
     step: bool = True               # False on the last frame
+    surfaces: list = field(default_factory=list)  # mesh igniters: (points (k, 3), radius m, time s)
+    painted: object = None          # (n,) Ignite map values to light at this frame's start
+    flames: object = None           # (points (k, 3), widths (k,)) of the lit Flames, or None
 
 
 def path_ignitions(start, end, t0: float, dt: float, spacing: float) -> list:
@@ -120,12 +123,18 @@ class CoreWorker(threading.Thread):
                 lit += sim.ignite(point, time=time, radius=radius)
             except ValueError:
                 pass  # the igniter is off the sheet: it lights nothing (counted as lit == 0)
+        for points, radius, time in task.surfaces:
+            lit += sim.ignite_near(points, radius=radius, time=time)
+        if task.painted is not None:
+            lit += sim.ignite_map(task.painted, time=task.index * self._dt)
         positions = np.array(sim.vertex_positions(), dtype=np.float64, copy=True)
         particles = None
         if self._want_particles:
             pts, temps = sim.particles()
             particles = (np.array(pts, dtype=np.float32, copy=True),
                          np.array(temps, dtype=np.float32, copy=True))
+        if task.flames is not None:
+            sim.set_fire_sources(*task.flames)
         if task.step:
             self._blow(sim, task, positions)
             if task.dynamics:

@@ -3,6 +3,8 @@
 #include <Eigen/Geometry>
 
 #include <algorithm>
+#include <array>
+#include <map>
 #include <cmath>
 #include <limits>
 
@@ -21,7 +23,109 @@ std::uint64_t mix(std::uint64_t x) {
 constexpr int kNoiseScale = 10;
 constexpr double kSmoothShare = 0.75;
 
+// Barycentric weights of the point of triangle abc closest to p (Ericson, Real-Time Collision
+// Detection, 5.1.5): a point off the triangle takes its nearest edge's or corner's value.
+Eigen::Vector3d closest_barycentric(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                                    const Eigen::Vector3d& c) {
+  const Eigen::Vector3d ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0 && d2 <= 0) return {1, 0, 0};
+  const Eigen::Vector3d bp = p - b;
+  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0 && d4 <= d3) return {0, 1, 0};
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) {
+    const double v = d1 / (d1 - d3);
+    return {1 - v, v, 0};
+  }
+  const Eigen::Vector3d cp = p - c;
+  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0 && d5 <= d6) return {0, 0, 1};
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) {
+    const double w = d2 / (d2 - d6);
+    return {1 - w, 0, w};
+  }
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
+    const double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+    return {0, 1 - w, w};
+  }
+  const double denom = 1.0 / (va + vb + vc);
+  const double v = vb * denom, w = vc * denom;
+  return {1 - v - w, v, w};
+}
+
 }  // namespace
+
+std::vector<double> vertex_field_at_cells(const FireCells& cells, const RowMatX3& V, const RowMatX3i& F,
+                                          const Eigen::VectorXd& values, bool sharp_zero) {
+  const int nv = static_cast<int>(V.rows());
+  std::vector<Eigen::Vector3d> pts(nv);
+  for (int i = 0; i < nv; ++i) pts[i] = V.row(i).transpose();
+  const KdTree3 tree(pts);
+  std::vector<std::vector<int>> faces_of(nv);
+  for (int f = 0; f < F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) faces_of[F(f, k)].push_back(f);
+  std::vector<double> out(cells.size());
+  std::vector<int> candidates;
+  for (int c = 0; c < cells.size(); ++c) {
+    const Eigen::Vector3d q = cells.rest(c);
+    const int v = tree.nearest(q);
+    // The faces around the nearest vertex and around its neighbours: the triangle holding q
+    // is among them unless the mesh has slivers longer than two rings.
+    candidates.clear();
+    for (int f : faces_of[v])
+      for (int k = 0; k < 3; ++k) candidates.insert(candidates.end(), faces_of[F(f, k)].begin(), faces_of[F(f, k)].end());
+    double best_d2 = std::numeric_limits<double>::infinity();
+    double value = values[v];  // a vertex on no face: its own value
+    int major = v;             // the triangle's vertex with the largest weight
+    for (int f : candidates) {
+      const Eigen::Vector3d a = pts[F(f, 0)], b = pts[F(f, 1)], cc = pts[F(f, 2)];
+      const Eigen::Vector3d w = closest_barycentric(q, a, b, cc);
+      const double d2 = (w[0] * a + w[1] * b + w[2] * cc - q).squaredNorm();
+      if (d2 < best_d2) {
+        best_d2 = d2;
+        value = w[0] * values[F(f, 0)] + w[1] * values[F(f, 1)] + w[2] * values[F(f, 2)];
+        int k;
+        w.maxCoeff(&k);
+        major = F(f, k);
+      }
+    }
+    // Zero is a firebreak, not a slow zone: interpolated, a line of zero vertices would only
+    // slow the fire between them. A cell is zero where its nearest vertex is (a band one mesh
+    // edge wide on a coarse mesh), or near a zero vertex (below).
+    out[c] = sharp_zero && values[major] <= 0.0 ? 0.0 : value;
+  }
+  if (!sharp_zero) return out;
+  // And every cell within a cell's spacing of a zero vertex: a painted line on a mesh about as
+  // fine as the cells, or lying on the cells' borders, has no gap the front could slip through
+  // (the nearest-vertex rule alone left 2 of 40 cells open on such a line).
+  const double h = cells.spacing();
+  auto key = [h](const Eigen::Vector3d& p) {
+    const Eigen::Vector3d q = (p / h).array().floor();
+    return std::array<std::int64_t, 3>{static_cast<std::int64_t>(q.x()), static_cast<std::int64_t>(q.y()),
+                                       static_cast<std::int64_t>(q.z())};
+  };
+  std::map<std::array<std::int64_t, 3>, std::vector<int>> zeros;
+  for (int i = 0; i < nv; ++i)
+    if (values[i] <= 0.0) zeros[key(pts[i])].push_back(i);
+  if (zeros.empty()) return out;
+  for (int c = 0; c < cells.size(); ++c) {
+    const Eigen::Vector3d q = cells.rest(c);
+    const auto k = key(q);
+    for (int d = 0; d < 27 && out[c] != 0.0; ++d) {
+      const auto it = zeros.find({k[0] + d % 3 - 1, k[1] + (d / 3) % 3 - 1, k[2] + d / 9 - 1});
+      if (it == zeros.end()) continue;
+      for (int i : it->second)
+        if ((pts[i] - q).squaredNorm() <= h * h) {
+          out[c] = 0.0;
+          break;
+        }
+    }
+  }
+  return out;
+}
 
 double seeded_uniform(std::uint64_t seed, std::uint64_t stream, std::uint64_t key) {
   const std::uint64_t h = mix(seed ^ mix(stream * 0x100000001b3ULL + key));

@@ -44,6 +44,15 @@ struct SpreadLaw {
   double max_drive = 0.9;          ///< cap on |e| along the sheet
 };
 
+/// @brief A per-vertex field of the input mesh read at every cell's rest position: the
+/// barycentric value on the nearest input triangle (among those around the nearest input
+/// vertex and its neighbours), so a map painted on a 4-vertex quad covers all N x N cells and a
+/// sharp painted edge stays within a cell of where it was painted. With sharp_zero, a painted 0
+/// stays 0 (a firebreak) on the cells around it rather than blending (fire_cells.cpp).
+std::vector<double> vertex_field_at_cells(const class FireCells& cells, const RowMatX3& vertices,
+                                          const RowMatX3i& faces, const Eigen::VectorXd& values,
+                                          bool sharp_zero);
+
 class FireCells {
  public:
   virtual ~FireCells() = default;

@@ -1,12 +1,17 @@
 #include "simulation.hpp"
 
+#include "heat.hpp"
+
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 
 #include <algorithm>
 #include <cmath>
+#include <array>
 #include <limits>
+#include <map>
 #include <stdexcept>
+#include <string>
 
 namespace thinburn {
 namespace {
@@ -46,8 +51,9 @@ std::unique_ptr<FireCells> make_cells(const RowMatX3& V, const RowMatX3i& F, con
 }  // namespace
 
 Simulation::Simulation(const RowMatX3& vertices, const RowMatX3i& faces, const RowMatX2& uv,
-                       const SimulationParams& params, const std::vector<std::uint8_t>& pinned)
-    : params_(params), vertices_(vertices), cells_(make_cells(vertices, faces, uv, params)) {
+                       const SimulationParams& params, const std::vector<std::uint8_t>& pinned,
+                       const CellMaps& maps)
+    : params_(params), vertices_(vertices), faces_(faces), cells_(make_cells(vertices, faces, uv, params)) {
   if (!(params.v0 > 0)) throw std::invalid_argument("v0 must be > 0");
   if (!(params.burn_duration > 0)) throw std::invalid_argument("burn_duration must be > 0");
   if (!(params.ash_strength >= 0 && params.ash_strength <= 1)) throw std::invalid_argument("ash_strength must be in [0, 1]");
@@ -64,6 +70,7 @@ Simulation::Simulation(const RowMatX3& vertices, const RowMatX3i& faces, const R
   }
   if (!pinned.empty() && pinned.size() != static_cast<std::size_t>(vertices.rows()))
     throw std::invalid_argument("pinned: one flag per vertex expected");
+  apply_maps(faces, maps);
   if (params.shell) {
     if (grid_)
       shell_ = std::make_unique<Shell>(grid_->sheet(), shell_params(), mass_, pinned);
@@ -71,6 +78,222 @@ Simulation::Simulation(const RowMatX3& vertices, const RowMatX3i& faces, const R
       shell_ = std::make_unique<Shell>(surface_->surface(), vertices, faces, shell_params(), mass_, pinned);
   }
   build_locator();
+  if (params.ignition_temperature > 0) {
+    if (!std::isfinite(params.ignition_temperature) || !(params.ignition_gain > 0) || !(params.heat_loss >= 0))
+      throw std::invalid_argument("heat ignition: ignition_temperature must be finite, ignition_gain > 0 and heat_loss >= 0");
+    cell_temp_.assign(nc, 0.0);
+    find_pieces();
+  }
+  if (params.finish_within > 0) {
+    if (!std::isfinite(params.finish_within)) throw std::invalid_argument("finish_within must be finite");
+    plan_cells_ = cells_->clone();
+    // Each cell burns at most half the time: the rest is for the fire to travel.
+    double longest = 0.0;
+    for (int c = 0; c < nc; ++c)
+      if (cells_->inside()[c] && !is_firebreak(c)) longest = std::max(longest, duration_[c]);
+    const double cut = longest > 0 ? std::min(1.0, 0.5 * params.finish_within / longest) : 1.0;
+    for (double& d : duration_) d *= cut;
+  }
+}
+
+void Simulation::find_pieces() {
+  // Connected pieces of the cells (8-neighbours on the grid, the cell graph on a surface).
+  const int nc = cells_->size();
+  piece_.assign(nc, -1);
+  const auto& in = cells_->inside();
+  std::vector<int> stack;
+  int pieces = 0;
+  for (int seed = 0; seed < nc; ++seed) {
+    if (!in[seed] || piece_[seed] >= 0) continue;
+    piece_[seed] = pieces;
+    stack.assign(1, seed);
+    while (!stack.empty()) {
+      const int c = stack.back();
+      stack.pop_back();
+      auto visit = [&](int n) {
+        if (in[n] && piece_[n] < 0) {
+          piece_[n] = pieces;
+          stack.push_back(n);
+        }
+      };
+      if (grid_) {
+        const int N = grid_->sheet().cells(), r = c / N, col = c % N;
+        for (int dr = -1; dr <= 1; ++dr)
+          for (int dc = -1; dc <= 1; ++dc)
+            if ((dr || dc) && r + dr >= 0 && r + dr < N && col + dc >= 0 && col + dc < N) visit((r + dr) * N + col + dc);
+      } else {
+        const SurfaceCells& sc = surface_->surface();
+        for (int q = sc.nbr_offset()[c]; q < sc.nbr_offset()[c + 1]; ++q) visit(sc.nbr_index()[q]);
+      }
+    }
+    ++pieces;
+  }
+  piece_alight_.assign(pieces, 0);
+}
+
+void Simulation::heat_ignite(double dt) {
+  // Eq 2 at the cells where they are now, with the ignition's own Ct: the particles' heat,
+  // less Newton cooling. A cell catches fire at the threshold, but only on a piece not yet
+  // alight: there eq 1's front is the fire, and heat lighting cells ahead of it would change
+  // the paper's spread; across a gap (another sheet, a stack) heat is the only way over.
+  if (!(params_.ignition_temperature > 0) || !shell_) return;
+  const ParticleSystem& ps = shell_->particles();
+  const RowMatX3 where = cell_positions();
+  const double keep = std::exp(-params_.heat_loss * dt);
+  for (double& t : cell_temp_) t *= keep;
+  if (ps.positions().rows() > 0) {
+    Eigen::VectorXd gain;
+    KernelSumOptions o;
+    o.power = 2;
+    o.d_min = params_.bending.d_min;
+    o.method = params_.bending.fast ? SumMethod::Fast : SumMethod::Direct;
+    o.tolerance = params_.bending.tolerance;
+    particle_heat(RowMatX3(ps.positions()), Eigen::VectorXd(ps.temperatures()), where, params_.ignition_gain, dt, o,
+                  gain);
+    for (int c = 0; c < cells_->size(); ++c) cell_temp_[c] += gain[c];
+  }
+  for (int c : burning_) piece_alight_[piece_[c]] = 1;
+  std::vector<int> hot;
+  for (int c = 0; c < cells_->size(); ++c)
+    if (cells_->inside()[c] && state_[c] == kUnburnt && !piece_alight_[piece_[c]] &&
+        cell_temp_[c] >= params_.ignition_temperature)
+      hot.push_back(c);
+  if (!hot.empty()) ignite_cells(hot, time_);
+}
+
+void Simulation::set_fire_sources(const RowMatX3& points, const Eigen::VectorXd& lengths) {
+  if (!shell_) throw std::invalid_argument("fire sources: their flames are fire particles, which need shell=True");
+  if (points.rows() != lengths.size())
+    throw std::invalid_argument("fire sources: one length per point expected (" + std::to_string(points.rows()) +
+                                " points, " + std::to_string(lengths.size()) + " lengths)");
+  if (!points.allFinite() || !lengths.allFinite() || (lengths.array() < 0).any())
+    throw std::invalid_argument("fire sources: points must be finite and lengths finite and >= 0");
+  source_pos_ = points;
+  source_len_ = lengths;
+}
+
+void Simulation::note_sources(const std::vector<int>& lit, double t0) {
+  if (!plan_cells_ || lit.empty()) return;
+  if (pace_.t0 < 0 || t0 < pace_.t0) pace_.t0 = t0;
+  for (int c : lit) {
+    auto it = std::lower_bound(pace_.sources.begin(), pace_.sources.end(), c);
+    if (it != pace_.sources.end() && *it == c) continue;
+    pace_.sources.insert(it, c);
+    pace_.stale = true;
+  }
+}
+
+void Simulation::replan() {
+  // Arrival times over the rest shape from every source at once, at the painted speeds with
+  // no slope factor and no drive: how far each cell is, in seconds of the material's speed.
+  std::unique_ptr<FireCells> f = plan_cells_->clone();
+  SpreadLaw law;
+  law.v = [this](int c) { return params_.v0 * v_scale_[c]; };
+  CellView rest;
+  rest.position = [&f](int c) { return f->rest(c); };
+  rest.normal = [&f](int c) { return f->rest_normal(c); };
+  rest.reference_normal = rest.normal;
+  for (int c : pace_.sources) f->ignite(c, 0.0, law, rest);
+  f->advance(std::numeric_limits<double>::max(), law, rest);
+  pace_.tau = f->arrival();
+  pace_.order.clear();
+  for (int c = 0; c < f->size(); ++c)
+    if (std::isfinite(pace_.tau[c]) && cells_->inside()[c]) pace_.order.push_back(c);
+  std::sort(pace_.order.begin(), pace_.order.end(), [this](int a, int b) {
+    return pace_.tau[a] < pace_.tau[b] || (pace_.tau[a] == pace_.tau[b] && a < b);
+  });
+  pace_.cum.resize(pace_.order.size());
+  double sum = 0.0;
+  for (std::size_t k = 0; k < pace_.order.size(); ++k) pace_.cum[k] = (sum += cells_->area(pace_.order[k]));
+  // The last cells to catch fire (the farthest 2 % of the area) burn out last: the spread must
+  // end their longest burn before the target (the longest burn anywhere ended most fires
+  // 5-10 % early, the duration noise being about that share of a short target).
+  double last = 0.0;
+  for (std::size_t k = pace_.order.size(); k-- > 0;) {
+    last = std::max(last, duration_[pace_.order[k]]);
+    if (sum - (k ? pace_.cum[k - 1] : 0.0) >= 0.02 * sum) break;
+  }
+  pace_.window = params_.finish_within - last;
+  pace_.stale = false;
+  pace_.has_prev = false;
+  pace_.covered = pace_.scaled = 0.0;
+}
+
+double Simulation::tau_covered() const {
+  // The fire's progress in tau: the tau by which as much reachable area is lit as is lit now.
+  // The whole front counts, so a corner the curl slows holds the pace back as it should.
+  double lit = 0.0;
+  for (int c : pace_.order)
+    if (state_[c] != kUnburnt) lit += cells_->area(c);
+  if (pace_.order.empty()) return 0.0;
+  const auto it = std::lower_bound(pace_.cum.begin(), pace_.cum.end(), lit);
+  if (it == pace_.cum.end()) return pace_.tau[pace_.order.back()];
+  const std::size_t k = static_cast<std::size_t>(it - pace_.cum.begin());
+  const double lo_area = k ? pace_.cum[k - 1] : 0.0, lo_tau = k ? pace_.tau[pace_.order[k - 1]] : 0.0;
+  const double share = (lit - lo_area) / std::max(pace_.cum[k] - lo_area, 1e-300);
+  return lo_tau + share * (pace_.tau[pace_.order[k]] - lo_tau);
+}
+
+void Simulation::pace_step(double dt) {
+  // Per-step feedback on the speed scale: the tau still to cover over the time left, divided
+  // by the efficiency, how much tau a second of scale really covers (eq 1's slope factor on a
+  // curled sheet, the drive, the front's band holding times set at an older scale). The
+  // efficiency is the ratio of decayed sums over a window of 15 % of the target, and the scale
+  // moves by at most dt / (5 % of the target) a step: the front answers a change only after a
+  // cell or two, and a faster loop oscillates (a lantern at 40 cells did, finishing 15 % early).
+  if (!plan_cells_ || pace_.t0 < 0) return;
+  if (pace_.stale) replan();
+  if (pace_.order.empty()) return;
+  constexpr double kMinScale = 1e-3, kMaxScale = 1e3;
+  const double target = params_.finish_within;
+  const double window = std::max(0.15 * target, 4.0 * dt);
+  const double covered = tau_covered();
+  if (pace_.has_prev && pace_.prev_dt > 0) {
+    const double keep = std::exp(-pace_.prev_dt / window);
+    pace_.covered = keep * pace_.covered + (covered - pace_.prev_tau);
+    pace_.scaled = keep * pace_.scaled + speed_scale_ * pace_.prev_dt;
+  }
+  // A prior of a quarter window at efficiency 1, so the first steps' few cells do not rule.
+  const double prior = 0.25 * window * speed_scale_;
+  const double eta = std::clamp((pace_.covered + prior) / (pace_.scaled + prior), 0.05, 2.0);
+  const double remaining = pace_.tau[pace_.order.back()] - covered;
+  const double left = pace_.t0 + pace_.window - time_;
+  if (remaining > 0) {
+    double want = left > dt ? remaining / (left * eta) : kMaxScale;
+    if (pace_.has_prev) {
+      const double step = 1.0 + dt / (0.05 * target);
+      want = std::clamp(want, speed_scale_ / step, speed_scale_ * step);
+    }
+    speed_scale_ = std::clamp(want, kMinScale, kMaxScale);
+  }
+  pace_.prev_tau = covered;
+  pace_.prev_dt = dt;
+  pace_.has_prev = true;
+}
+
+void Simulation::apply_maps(const RowMatX3i& faces, const CellMaps& maps) {
+  auto read = [&](const Eigen::VectorXd& m, const char* name) {
+    if (m.size() != vertices_.rows())
+      throw std::invalid_argument(std::string(name) + ": one value per vertex expected (" +
+                                  std::to_string(vertices_.rows()) + "), got " + std::to_string(m.size()));
+    if (!m.allFinite() || (m.array() < 0).any())
+      throw std::invalid_argument(std::string(name) + ": values must be finite and >= 0");
+    return vertex_field_at_cells(*cells_, vertices_, faces, m, true);
+  };
+  // Fuel is how much there is to burn: the flame stays that much longer on a cell. The mass
+  // (what the lattice carries) stays the material's, so a painted map changes the fire, not
+  // the sheet's weight, and fuel 0 leaves no massless cells for the motion.
+  if (maps.speed.size()) {
+    const std::vector<double> s = read(maps.speed, "speed_map");
+    for (int c = 0; c < cells_->size(); ++c) v_scale_[c] *= s[c];
+  }
+  if (maps.fuel.size()) {
+    const std::vector<double> f = read(maps.fuel, "fuel_map");
+    for (int c = 0; c < cells_->size(); ++c) {
+      if (f[c] > 0) duration_[c] *= f[c];
+      else v_scale_[c] = 0.0;  // nothing to burn: a firebreak
+    }
+  }
 }
 
 void Simulation::bind_cells() {
@@ -165,7 +388,7 @@ double Simulation::grad2(int cell) const { return cells_->grad2(cell, view_); }
 
 double Simulation::cell_speed(int cell) const {
   const double v0 = params_.v0 * v_scale_[cell];
-  return std::max(params_.v_floor, 1.0 - params_.cv * grad2(cell)) * v0;
+  return std::max(params_.v_floor, 1.0 - params_.cv * grad2(cell)) * v0 * speed_scale_;
 }
 
 LocalSpeed Simulation::local_speed(int cell) const {
@@ -182,7 +405,8 @@ Eigen::Vector3d Simulation::drive() const {
 void Simulation::refresh_law() { law_.drive = drive(); }
 
 int Simulation::ignite(const Eigen::Vector3d& point, double t, double radius) {
-  const std::vector<int> lit = cells_near(point, radius);
+  std::vector<int> lit = cells_near(point, radius);
+  lit.erase(std::remove_if(lit.begin(), lit.end(), [this](int c) { return is_firebreak(c); }), lit.end());
   // The front cannot rewrite cells it has already accepted, so an ignition time before the
   // last step is taken as that step's end: the fire starts now and catches up from there.
   const double t0 = std::max(t, cells_->front_time());
@@ -191,7 +415,70 @@ int Simulation::ignite(const Eigen::Vector3d& point, double t, double radius) {
     cells_->ignite_point(lit[0], point - cell_position(lit[0]), t0, law_, view_);
   else
     for (int c : lit) cells_->ignite(c, t0, law_, view_);
+  note_sources(lit, t0);
   return static_cast<int>(lit.size());
+}
+
+int Simulation::ignite_cells(const std::vector<int>& cells, double t) {
+  const double t0 = std::max(t, cells_->front_time());
+  refresh_law();
+  std::vector<int> lit;
+  for (int c : cells) {
+    if (c < 0 || c >= cells_->size())
+      throw std::invalid_argument("cells: index " + std::to_string(c) + " outside [0, " + std::to_string(cells_->size()) + ")");
+    if (!cells_->inside()[c] || is_firebreak(c) || state_[c] != kUnburnt) continue;
+    cells_->ignite(c, t0, law_, view_);
+    lit.push_back(c);
+  }
+  note_sources(lit, t0);
+  return static_cast<int>(lit.size());
+}
+
+int Simulation::ignite_near(const RowMatX3& points, double radius, double t) {
+  if (!(radius >= 0) || !std::isfinite(radius)) throw std::invalid_argument("radius must be >= 0 and finite");
+  if (points.rows() == 0) return 0;
+  // Points in buckets of the radius (at least a cell's spacing): a cell looks in the 27 around it.
+  const double h = std::max(radius, cells_->spacing());
+  auto key = [h](const Eigen::Vector3d& p) {
+    const Eigen::Vector3d q = (p / h).array().floor();
+    return std::array<std::int64_t, 3>{static_cast<std::int64_t>(q.x()), static_cast<std::int64_t>(q.y()),
+                                       static_cast<std::int64_t>(q.z())};
+  };
+  std::map<std::array<std::int64_t, 3>, std::vector<int>> buckets;
+  for (Eigen::Index i = 0; i < points.rows(); ++i) buckets[key(points.row(i).transpose())].push_back(static_cast<int>(i));
+  const double r2 = radius * radius;
+  std::vector<int> near;
+  for (int c = 0; c < cells_->size(); ++c) {
+    if (!cells_->inside()[c] || state_[c] != kUnburnt || is_firebreak(c)) continue;
+    const Eigen::Vector3d p = cell_position(c);
+    const auto k = key(p);
+    bool found = false;
+    for (int dx = -1; dx <= 1 && !found; ++dx)
+      for (int dy = -1; dy <= 1 && !found; ++dy)
+        for (int dz = -1; dz <= 1 && !found; ++dz) {
+          const auto it = buckets.find({k[0] + dx, k[1] + dy, k[2] + dz});
+          if (it == buckets.end()) continue;
+          for (int i : it->second)
+            if ((points.row(i).transpose() - p).squaredNorm() <= r2) {
+              found = true;
+              break;
+            }
+        }
+    if (found) near.push_back(c);
+  }
+  return ignite_cells(near, t);
+}
+
+std::vector<double> Simulation::vertex_field(const Eigen::VectorXd& values) const {
+  if (values.size() != vertices_.rows())
+    throw std::invalid_argument("values: one per vertex expected (" + std::to_string(vertices_.rows()) + "), got " +
+                                std::to_string(values.size()));
+  return vertex_field_at_cells(*cells_, vertices_, faces_, values, false);
+}
+
+void Simulation::set_speed_scale(double s) {
+  if (!(s > 0) || !std::isfinite(s)) throw std::invalid_argument("speed_scale must be > 0 and finite");
+  speed_scale_ = s;
 }
 
 std::vector<int> Simulation::scan_cells_near(const Eigen::Vector3d& point, double radius, double* nearest_distance,
@@ -239,6 +526,10 @@ struct Simulation::Saved {
   std::vector<int> burning;
   std::vector<double> mass;
   Shell::Checkpoint shell;
+  Pace pace;
+  double speed_scale;
+  std::vector<double> cell_temp;
+  std::vector<std::uint8_t> piece_alight;
 };
 
 bool Simulation::step_may_throw() const {
@@ -248,7 +539,7 @@ bool Simulation::step_may_throw() const {
 }
 
 Simulation::Saved Simulation::save() const {
-  return Saved{time_, cells_->clone(), state_, burning_, mass_, shell_->checkpoint()};
+  return Saved{time_, cells_->clone(), state_, burning_, mass_, shell_->checkpoint(), pace_, speed_scale_, cell_temp_, piece_alight_};
 }
 
 void Simulation::restore(Saved&& s) {
@@ -259,6 +550,10 @@ void Simulation::restore(Saved&& s) {
   burning_ = std::move(s.burning);
   mass_ = std::move(s.mass);
   shell_->rollback(std::move(s.shell));
+  pace_ = std::move(s.pace);
+  speed_scale_ = s.speed_scale;
+  cell_temp_ = std::move(s.cell_temp);
+  piece_alight_ = std::move(s.piece_alight);
   locator_stale_ = true;
 }
 
@@ -276,6 +571,7 @@ void Simulation::step(double dt) {
 
 void Simulation::step_unguarded(double dt) {
   const double t_end = time_ + dt;
+  pace_step(dt);
   refresh_law();
   for (int c : cells_->advance(t_end, law_, view_)) {
     if (state_[c] != kUnburnt) continue;
@@ -286,6 +582,7 @@ void Simulation::step_unguarded(double dt) {
   retire_burnt();
   if (shell_) step_shell(dt);
   locator_stale_ = shell_ != nullptr;
+  heat_ignite(dt);
 }
 
 void Simulation::retire_burnt() {
@@ -400,12 +697,20 @@ void Simulation::gather_shell_sources() {
   // (eq 3): the burning cells, on their flame face.
   fringe_into(fringe_buf_);
   const Eigen::Index k = static_cast<Eigen::Index>(fringe_buf_.size());
-  emit_pos_.resize(k, 3);
-  emit_normal_.resize(k, 3);
-  emit_len_.setConstant(k, cells_->spacing());
+  // The fire sources (a candle) after the fringe, so the fringe's emitters keep their numbers
+  // (their random draws) and a simulation without sources is unchanged.
+  const Eigen::Index ks = source_pos_.rows();
+  emit_pos_.resize(k + ks, 3);
+  emit_normal_.resize(k + ks, 3);
+  emit_len_.setConstant(k + ks, cells_->spacing());
   for (Eigen::Index e = 0; e < k; ++e) {
     emit_pos_.row(e) = cell_position(fringe_buf_[e]).transpose();
     emit_normal_.row(e) = cell_normal(fringe_buf_[e]).transpose();
+  }
+  for (Eigen::Index e = 0; e < ks; ++e) {
+    emit_pos_.row(k + e) = source_pos_.row(e);
+    emit_normal_.row(k + e) = Eigen::RowVector3d::UnitZ();  // a flame burns upward
+    emit_len_[k + e] = source_len_[e];
   }
   const double half = 0.5 * shell_->thickness();
   ignition_pts_.resize(static_cast<Eigen::Index>(burning_.size()), 3);

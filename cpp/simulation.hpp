@@ -42,6 +42,13 @@ struct SimulationParams {
   double v_floor = 0.05;       ///< fraction of V0 below which V never falls
   double speed_noise = 0.0;    ///< relative per-cell jitter of V0 (seeded), breaks grid symmetry
   double burn_duration = 4.0;  ///< s a cell burns before it is burnt
+  /// s from the first ignition until every cell the fire can reach has burnt out; 0: off, the
+  /// material's speed (docs/fire_front.md, "Finishing within a time").
+  double finish_within = 0.0;
+  // Heat ignites (eq 2 at the cells; docs/heat.md, "Heat ignites"). 0: off.
+  double ignition_temperature = 0.0;  ///< K above ambient at which an unburnt cell catches fire
+  double ignition_gain = 0.0;         ///< eq 2's Ct for the cells' temperature, m^2/s
+  double heat_loss = 0.3;             ///< 1/s, the cells' cooling (Newton's law)
   double duration_noise = 0.0; ///< relative per-cell jitter of the burn duration
   // Direction-dependent spread (beyond the paper; 0 keeps eq 1 symmetric).
   double climb = 0.0;          ///< drive toward world-up along the sheet, |e| per unit slope
@@ -62,16 +69,39 @@ struct SimulationParams {
   BendingParams bending;
 };
 
+/// @brief Painted maps, one value >= 0 per input vertex; an empty map is 1 everywhere (and
+/// costs nothing: the simulation is bit-identical to one without it). Read at the cells by
+/// vertex_field_at_cells. 0 in either map is a firebreak: the cell never burns.
+struct CellMaps {
+  Eigen::VectorXd speed;  ///< multiplies V0 (eq 1)
+  Eigen::VectorXd fuel;   ///< multiplies the burn duration
+};
+
 class Simulation {
  public:
   /// @param pinned per input vertex, nonzero = held in place (may be empty).
+  /// @param maps painted speed and fuel (docs/fire_front.md, "Painted maps").
   Simulation(const RowMatX3& vertices, const RowMatX3i& faces, const RowMatX2& uv,
-             const SimulationParams& params, const std::vector<std::uint8_t>& pinned = {});
+             const SimulationParams& params, const std::vector<std::uint8_t>& pinned = {},
+             const CellMaps& maps = {});
 
   /// @brief Ignite the inside cells within radius of a point (the nearest one when radius is 0)
-  /// at time t. Throws std::invalid_argument when no cell lies within reach of the point.
-  /// @return the number of cells lit.
+  /// at time t; firebreak cells within it stay unlit. Throws std::invalid_argument when no cell
+  /// lies within reach of the point.
+  /// @return the number of cells lit (0 when all of them are firebreaks).
   int ignite(const Eigen::Vector3d& point, double t, double radius);
+  /// @brief Ignite the given cells at time t (firebreaks, cells outside the sheet and cells
+  /// already alight are skipped). @return the number lit.
+  int ignite_cells(const std::vector<int>& cells, double t);
+  /// @brief Ignite every unburnt cell within radius of any of the points now (a mesh igniter's
+  /// surface, sampled); points may lie anywhere. @return the number lit.
+  int ignite_near(const RowMatX3& points, double radius, double t);
+  /// @brief A per-vertex field read at every cell (vertex_field_at_cells).
+  std::vector<double> vertex_field(const Eigen::VectorXd& values) const;
+  /// @brief Multiplies every cell's speed from now on (1: as the material says); > 0. For a
+  /// burn timed to a duration (docs/fire_front.md, "Burn duration").
+  void set_speed_scale(double s);
+  double speed_scale() const { return speed_scale_; }
   /// @brief The cells ignite(point, t, radius) would light, ascending; throws as ignite does.
   std::vector<int> cells_near(const Eigen::Vector3d& point, double radius) const;
   /// @brief Advance by dt seconds (dt > 0). Atomic: a step that throws (an explicit integrator
@@ -107,6 +137,18 @@ class Simulation {
   /// @brief Fringe cells (paper §3.1): burning cells with a neighbour neither burning nor burnt.
   std::vector<int> fringe() const;
   void fringe_into(std::vector<int>& out) const;
+  /// @brief Flames that burn on their own (a candle): each point emits fire particles as a
+  /// burning front of that length would (upward), every step until replaced; empty: none.
+  /// Needs the shell (its particles). Their heat bends the sheet (eq 2) and, with heat
+  /// ignition, lights it.
+  void set_fire_sources(const RowMatX3& points, const Eigen::VectorXd& lengths);
+  /// @brief Per cell, its temperature above ambient from the fire particles (eq 2 with
+  /// ignition_gain, cooling at heat_loss), K; empty when heat ignition is off.
+  const std::vector<double>& cell_temperature() const { return cell_temp_; }
+  /// @brief Per cell, its connected piece of the sheet (heat ignition only; else empty).
+  const std::vector<int>& cell_pieces() const { return piece_; }
+  /// @brief 1 where a cell can never burn (a painted 0 in the speed or fuel map).
+  bool is_firebreak(int cell) const { return v_scale_[cell] == 0.0; }
   /// @brief Char per cell in [0, 1]: 0 before ignition, rising over the burn, 1 when burnt.
   std::vector<double> cell_char() const;
   /// @brief Remaining mass per cell, kg.
@@ -166,10 +208,43 @@ class Simulation {
   void refresh_law();
   Eigen::Vector3d drive() const;  // eq 1's world drive now: climb and wind
   double noise(int cell, std::uint64_t stream) const;
+  void apply_maps(const RowMatX3i& faces, const CellMaps& maps);
   std::vector<int> scan_cells_near(const Eigen::Vector3d& point, double radius, double* nearest_distance, int* nearest) const;
+
+  // The pace of a burn timed by finish_within: the rest-shape arrival times tau (slope factor
+  // and drive off, scale 1) from the sources so far, and the feedback on how fast the fire
+  // really covers them.
+  struct Pace {
+    std::vector<int> sources;    // cells lit by ignite calls, ascending
+    bool stale = false;          // sources changed since tau was solved
+    double t0 = -1.0;            // the first ignition, s (< 0: none yet)
+    std::vector<double> tau;     // per cell, s; inf where the fire cannot reach
+    std::vector<int> order;      // reachable cells by tau
+    std::vector<double> cum;     // their areas, summed in that order
+    double window = 0.0;         // s from t0 by which the last cell must ignite
+    double covered = 0.0;        // tau covered, decayed over the feedback's window
+    double scaled = 0.0;         // seconds of speed scale spent, decayed alike
+    double prev_tau = 0.0, prev_dt = 0.0;
+    bool has_prev = false;       // false: the next step sets the scale outright
+  };
+  void note_sources(const std::vector<int>& lit, double t0);
+  void find_pieces();
+  void heat_ignite(double dt);
+  RowMatX3 source_pos_;
+  Eigen::VectorXd source_len_;
+  std::vector<double> cell_temp_;
+  std::vector<int> piece_;
+  std::vector<std::uint8_t> piece_alight_;
+  void replan();
+  double tau_covered() const;
+  void pace_step(double dt);
 
   SimulationParams params_;
   RowMatX3 vertices_;
+  Pace pace_;
+  std::unique_ptr<FireCells> plan_cells_;  // pristine cells for the pace's solves
+  RowMatX3i faces_;
+  double speed_scale_ = 1.0;
   std::unique_ptr<FireCells> cells_;
   const GridCells* grid_ = nullptr;    // cells_ when it is the grid
   const ShellCells* surface_ = nullptr;  // cells_ when it is on the surface

@@ -83,6 +83,10 @@ void define_params(py::module_& m) {
       .def_readwrite("speed_noise", &SimulationParams::speed_noise)
       .def_readwrite("burn_duration", &SimulationParams::burn_duration)
       .def_readwrite("duration_noise", &SimulationParams::duration_noise)
+      .def_readwrite("finish_within", &SimulationParams::finish_within)
+      .def_readwrite("ignition_temperature", &SimulationParams::ignition_temperature)
+      .def_readwrite("ignition_gain", &SimulationParams::ignition_gain)
+      .def_readwrite("heat_loss", &SimulationParams::heat_loss)
       .def_readwrite("climb", &SimulationParams::climb)
       .def_readwrite("wind_spread", &SimulationParams::wind_spread)
       .def_readwrite("max_drive", &SimulationParams::max_drive)
@@ -109,13 +113,22 @@ void define_simulation(py::module_& m) {
   using S = Simulation;
   py::class_<S>(m, "Simulation", "The burning sheet, stepped in time.")
       .def(py::init([](const RowMatX3& v, const RowMatX3i& f, const RowMatX2& uv, const SimulationParams& p,
-                       const std::vector<std::uint8_t>& pinned) {
+                       const std::vector<std::uint8_t>& pinned, const Eigen::VectorXd& speed_map,
+                       const Eigen::VectorXd& fuel_map) {
              py::gil_scoped_release release;
-             return new S(v, f, uv, p, pinned);
+             return new S(v, f, uv, p, pinned, CellMaps{speed_map, fuel_map});
            }),
-           py::arg("vertices"), py::arg("faces"), py::arg("uv"), py::arg("params"), py::arg("pinned"))
+           py::arg("vertices"), py::arg("faces"), py::arg("uv"), py::arg("params"), py::arg("pinned"),
+           py::arg("speed_map"), py::arg("fuel_map"))
       .def("ignite", &S::ignite, py::arg("point"), py::arg("time"), py::arg("radius"),
            py::call_guard<py::gil_scoped_release>())
+      .def("ignite_cells", &S::ignite_cells, py::arg("cells"), py::arg("time"),
+           py::call_guard<py::gil_scoped_release>())
+      .def("ignite_near", &S::ignite_near, py::arg("points"), py::arg("radius"), py::arg("time"),
+           py::call_guard<py::gil_scoped_release>())
+      .def("set_fire_sources", &S::set_fire_sources, py::arg("points"), py::arg("lengths"))
+      .def("vertex_field", &S::vertex_field, py::arg("values"), py::call_guard<py::gil_scoped_release>())
+      .def_property("speed_scale", &S::speed_scale, &S::set_speed_scale)
       .def("cells_near", &S::cells_near, py::arg("point"), py::arg("radius"),
            py::call_guard<py::gil_scoped_release>())
       .def("step",
@@ -144,6 +157,12 @@ void define_simulation(py::module_& m) {
       .def_property_readonly("area", [](const S& s) { return s.fire_cells().total_area(); })
       .def("inside", [](const S& s) { return per_cell(s, s.fire_cells().inside()); })
       .def("cell_states", [](const S& s) { return per_cell(s, s.cell_states()); })
+      .def("cell_temperature", [](const S& s) { return per_cell(s, s.cell_temperature().empty() ? std::vector<double>(s.num_cells(), 0.0) : s.cell_temperature()); })
+      .def("firebreaks", [](const S& s) {
+        std::vector<std::uint8_t> b(s.num_cells());
+        for (int c = 0; c < s.num_cells(); ++c) b[c] = s.is_firebreak(c);
+        return per_cell(s, b);
+      })
       .def("ignition_times", [](const S& s) { return per_cell(s, s.ignition_times()); })
       .def("burn_durations", [](const S& s) { return per_cell(s, s.burn_durations()); })
       .def("cell_char", [](const S& s) { return per_cell(s, s.cell_char()); })

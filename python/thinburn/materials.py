@@ -72,6 +72,16 @@ MATERIALS = MappingProxyType({
 })
 """The five presets of Table 1, by name."""
 
+# Heat ignites (Simulation(heat_ignites=True); docs/heat.md, "Heat ignites"): the temperature
+# above a 20 °C room at which an unburnt cell of a preset catches fire, K. Paper's autoignition
+# is usually quoted as 218-246 °C (233 °C, "Fahrenheit 451", is the middle: 213 K above the
+# room); cotton (cloth, curtain) about 255 °C; silk chars more than it flames, about 300 °C
+# is assumed. Not in the paper (it ignites by igniters only); approximate values.
+IGNITION_TEMPERATURE = MappingProxyType({
+    "paper": 213.0, "hard_paper": 213.0, "cloth": 235.0, "curtain": 235.0, "silk": 280.0,
+})
+"""K above ambient at which each preset's unburnt cells catch fire from heat."""
+
 MATERIAL_FIELDS = tuple(f.name for f in fields(Material) if f.name != "name")
 
 

@@ -8,7 +8,7 @@ import numpy as np
 from . import _core
 from . import _validate as V
 from ._threads import resolve_threads
-from .materials import Material, resolve_material
+from .materials import IGNITION_TEMPERATURE, Material, resolve_material
 
 FRONT_METHODS = ("cellular", "cellular16", "fmm1", "fmm")
 
@@ -61,7 +61,15 @@ _PARAM_BOUNDS = {
     "max_drive": dict(low=0.0, high=0.95),
     "ash_fraction": dict(low=0.0, high=1.0),
     "ash_strength": dict(low=0.0, high=1.0),
+    "ignition_gain": dict(low=0.0, low_open=True),
+    "heat_loss": dict(low=0.0),
 }
+# Eq 2's Ct for the cells' temperature when heat ignites, m²/s (docs/heat.md, "Heat ignites"):
+# calibrated on two 15 cm paper sheets, the lower lit at its centre (scripts/heat_ignition.py,
+# 32 cells): the upper one catches fire 1.3 s later 1 cm above it, 2.3 s later 3 cm above, not
+# in 8 s 10 cm above (189 K at most), and 50 cm above it warms by 2.8 K. The particles' heat
+# scales with their birth rate (docs/heat.md): change this with particle_birth_rate.
+IGNITION_GAIN = 2e-4
 
 
 class Simulation:
@@ -102,6 +110,21 @@ class Simulation:
         substep as stability needs or raise.
     shell : False switches the paper's §4 off: no lattice, particles or motion; the sheet keeps
         its rest shape and only the fire runs.
+    finish_within : None (the material's speed) or seconds > 0: every cell the fire can reach
+        has burnt out that long after the first ignition, whatever the curl does. The speed is
+        scaled every step by feedback (``speed_scale`` then reads it), and a cell burns at most
+        half that time (docs/fire_front.md, "Finishing within a time").
+    heat_ignites : True: an unburnt cell whose temperature from the fire particles (eq 2 at
+        the cells, with ``ignition_gain``, cooling at ``heat_loss`` per second) passes its
+        material's ignition temperature (``thinburn.materials.IGNITION_TEMPERATURE``) catches
+        fire, on a piece of the mesh not yet alight: fire jumps gaps and climbs stacks of
+        sheets given as one mesh. Needs shell=True. ``cell_temperature()`` reads it.
+    speed_map : None or (n,) values >= 0, one per vertex: painted spread speed, multiplying
+        eq 1's V0 where the fire is (2: twice as fast, 0: a firebreak that never burns).
+    fuel_map : None or (n,) values >= 0, one per vertex: painted fuel, multiplying how long a
+        cell burns (2: flames stay twice as long; 0: nothing to burn, a firebreak). The maps are
+        read at every cell from the triangle under it (docs/fire_front.md, "Painted maps");
+        ``ignite`` lights no firebreak cell and returns how many it did light.
     **params : overrides of the model's scalars. A wrong type (text, a float where an int is
         due, a bool where a number is, a scalar for ``gravity``'s 3 components) raises
         TypeError, a bad value (NaN, inf, out of range, an int beyond a C int) ValueError; both
@@ -135,7 +158,8 @@ class Simulation:
 
     def __init__(self, vertices, faces, uv=None, material="paper", cells=128, seed=0,
                  threads=None, front="fmm", lattice=None, pinned=None, floor=None,
-                 integrator="implicit", shell=True, geometry="auto", **params):
+                 integrator="implicit", shell=True, geometry="auto", speed_map=None, fuel_map=None,
+                 finish_within=None, heat_ignites=False, **params):
         verts = V.real_array(vertices, "vertices", (-1, 3))
         if len(verts) < 3:
             raise ValueError(f"vertices: an empty mesh (need >= 3 vertices, got {len(verts)})")
@@ -150,6 +174,17 @@ class Simulation:
                          V.integer(seed, "seed", low=0, high=2**63 - 1),
                          V.choice(front, "front", FRONT_METHODS), params)
         p.geometry = V.choice(geometry, "geometry", GEOMETRIES)
+        if not isinstance(heat_ignites, (bool, np.bool_)):
+            raise TypeError(f"heat_ignites must be a bool, got {type(heat_ignites).__name__}")
+        if heat_ignites:
+            if not shell:
+                raise ValueError("heat_ignites: the heat comes from the fire particles, which need "
+                                 "shell=True")
+            p.ignition_temperature = IGNITION_TEMPERATURE.get(self.material.name, IGNITION_TEMPERATURE["paper"])
+            if p.ignition_gain == 0.0:
+                p.ignition_gain = IGNITION_GAIN
+        if finish_within is not None:
+            p.finish_within = V.real(finish_within, "finish_within", low=0.0, low_open=True)
         if p.geometry == "auto" and front in ("cellular", "cellular16"):
             p.geometry = "plane"  # the paper's rule is defined on the grid
         if not isinstance(shell, (bool, np.bool_)):
@@ -170,7 +205,8 @@ class Simulation:
                                  f"{verts[:, 2].min():.6g} < floor {p.floor_z:.6g})")
         _set_group(p.set_dynamics, None, {"integrator": V.choice(integrator, "integrator", INTEGRATORS)})
         pins = _pinned_mask(pinned, len(verts))
-        self._sim = _Serialised(_core.Simulation(verts, tris, uvs, p, pins))
+        maps = [_vertex_map(m, name, len(verts)) for m, name in ((speed_map, "speed_map"), (fuel_map, "fuel_map"))]
+        self._sim = _Serialised(_core.Simulation(verts, tris, uvs, p, pins, *maps))
         self.n_vertices = len(verts)
 
     @staticmethod
@@ -240,6 +276,48 @@ class Simulation:
         t = self.time if time is None else V.real(time, "time", low=0.0)
         r = V.real(radius, "radius", low=0.0)
         return self._sim.ignite(p, t, r)
+
+    def ignite_map(self, values, time=None, threshold=0.5) -> int:
+        """Ignite every cell where a painted per-vertex map (n,) reaches ``threshold``: the map
+        is read at the cells as ``speed_map`` is, so a vertex group lights the area painted,
+        not only its vertices. Firebreaks stay unlit. Returns the number of cells lit."""
+        m = V.real_array(values, "values", (self.n_vertices,))
+        t = self.time if time is None else V.real(time, "time", low=0.0)
+        thr = V.real(threshold, "threshold")
+        field = np.asarray(self._sim.vertex_field(m))
+        return self._sim.ignite_cells(np.flatnonzero(field >= thr).astype(np.int32).tolist(), t)
+
+    def ignite_near(self, points, radius, time=None) -> int:
+        """Ignite every unburnt cell within ``radius`` (m) of any of ``points`` (k, 3), where the
+        cells are now: a mesh igniter's surface, sampled at most about a radius apart, lights
+        the cells it touches. Points far from the sheet light nothing (no error). Returns the
+        number of cells lit."""
+        pts = V.real_array(points, "points", (-1, 3))
+        r = V.real(radius, "radius", low=0.0)
+        t = self.time if time is None else V.real(time, "time", low=0.0)
+        return self._sim.ignite_near(pts, r, t)
+
+    def set_fire_sources(self, points, widths) -> None:
+        """Flames that burn on their own (a candle, a burner): each point (k, 3) emits fire
+        particles upward as a burning front ``widths`` (k,) metres long would, every step from
+        now until replaced (``set_fire_sources(np.zeros((0, 3)), [])`` puts them out). Their
+        heat bends the sheet (eq 2) and, with ``heat_ignites``, lights it. Needs shell=True."""
+        pts = V.real_array(points, "points", (-1, 3))
+        w = V.real_array(widths, "widths", (len(pts),))
+        if (w < 0).any():
+            raise ValueError("widths must be >= 0 (m of flame front per point)")
+        if not self._sim.has_shell:
+            raise ValueError("set_fire_sources: flames are fire particles, which need shell=True")
+        self._sim.set_fire_sources(pts, w)
+
+    @property
+    def speed_scale(self) -> float:
+        """Multiplies every cell's spread speed from now on (1: the material's); > 0."""
+        return self._sim.speed_scale
+
+    @speed_scale.setter
+    def speed_scale(self, value) -> None:
+        self._sim.speed_scale = V.real(value, "speed_scale", low=0.0, low_open=True)
 
     def cells_near(self, point, radius=0.0) -> np.ndarray:
         """The cells ``ignite(point, radius=radius)`` would light: the nearest inside cell, or
@@ -458,6 +536,15 @@ class Simulation:
         """(N, N) uint8: 1 where the cell is part of the sheet."""
         return self._sim.inside()
 
+    def cell_temperature(self) -> np.ndarray:
+        """Per cell, K above ambient from the fire particles (heat_ignites; zeros otherwise)."""
+        return self._sim.cell_temperature()
+
+    def firebreaks(self) -> np.ndarray:
+        """(N, N) bool, (num_cells,) on a surface: cells that never burn (a painted 0 in
+        ``speed_map`` or ``fuel_map``)."""
+        return self._sim.firebreaks().astype(bool)
+
     def cell_states(self) -> np.ndarray:
         """(N, N) uint8: 0 unburnt, 1 burning, 2 burnt."""
         return self._sim.cell_states()
@@ -616,6 +703,18 @@ def _set_group(setter, prefix, values: dict) -> None:
         elif prefix == "material":
             msg = f"material: {msg}"
         raise type(exc)(msg) from None
+
+
+def _vertex_map(values, name: str, n: int) -> np.ndarray:
+    """A painted per-vertex map (speed_map, fuel_map): None is empty (the map is off)."""
+    if values is None:
+        return np.zeros(0)
+    a = V.real_array(values, name, (n,), finite=False)
+    bad = np.flatnonzero(~np.isfinite(a) | (a < 0))
+    if len(bad):
+        raise ValueError(f"{name}: values must be finite and >= 0 (0 = never burns); vertex {bad[0]} "
+                         f"holds {a[bad[0]]:g}")
+    return np.ascontiguousarray(a, dtype=np.float64)
 
 
 def _pinned_mask(pinned, n: int) -> np.ndarray:
