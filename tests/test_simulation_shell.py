@@ -410,3 +410,16 @@ def test_a_curling_sheet_never_passes_through_itself(name, seconds):
             crossed.append(frame)
     assert crossed == []
     assert np.abs(sim.vertex_positions() - scene.vertices).max() > 0.005  # it did move
+
+
+@pytest.mark.parametrize("wind", [None, 3.0])
+def test_implicit_and_symplectic_agree_on_paper_on_its_table(wind):
+    """Issue #12: the two integrators agree at dt = 1/24 s on the A4 demo (cells 64, 20 s), with
+    and without a 3 m/s wind: the RMS distance between their meshes over the implicit run's RMS
+    motion, measured 3.0 % and 1.9 % (the issue allows 15 %). Before friction acted before each
+    symplectic substep's move (and inside the implicit solve), the symplectic sheet crept 9 mm
+    and the implicit one 0.39 m across the table in the wind."""
+    from thinburn._bench_motion import motion_run, relative_error
+    rest, implicit, _ = motion_run("paper", wind, "implicit", 1 / 24, 20.0)
+    _, symplectic, _ = motion_run("paper", wind, "symplectic", 1 / 24, 20.0)
+    assert relative_error(symplectic, implicit, rest) < 0.045
