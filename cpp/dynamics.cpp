@@ -694,7 +694,7 @@ int LatticeDynamics::integrate(double dt, int substeps, StepStats& st) {
   // pass's start with more substeps, up to max_substeps, while more substeps still change the
   // answer: once a redo leaves the worst strain within kConverged of the try before, the
   // strain is the motion's own (a soft silk), not the step's.
-  constexpr double kStretchRedo = 0.05, kGrowth = 1.5, kConverged = 0.8;
+  constexpr double kStretchRedo = 0.01, kGrowth = 1.5, kConverged = 0.8;
   constexpr int kMaxRedos = 6;
   const bool implicit = is_implicit(p_.integrator);
   const double before = implicit ? max_active_strain() : 0.0;
