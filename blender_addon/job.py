@@ -307,7 +307,8 @@ class BakeJob:
 
     def status_text(self) -> str:
         """The status bar's line during a UI bake: sheet, frame, percentage, ETA."""
-        return (f"ThinBurn: baking '{self.obj_name}' frame {self.current_frame} of "
+        with_ = "".join(f" with '{n}'" if i == 0 else f", '{n}'" for i, n in enumerate(self.members[1:]))
+        return (f"ThinBurn: baking '{self.obj_name}'{with_} frame {self.current_frame} of "
                 f"{self.frames[0]}–{self.frames[-1]} ({100 * self.progress:.0f} %, ETA "
                 f"{self.eta_text()})  (Esc to cancel)")
 

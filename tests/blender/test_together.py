@@ -137,3 +137,34 @@ def test_sheets_out_of_reach_bake_alone(addon, tmp_path, gap, upper_heat):
     assert np.array_equal(_pc2(addon, tmp_path, "Lower")[1], alone)
     assert (point_attribute(lower, "thinburn_ignite_time") < addon.cache.NEVER_FRAME).any()
     assert (point_attribute(upper, "thinburn_ignite_time") >= addon.cache.NEVER_FRAME).all()
+
+
+def test_bake_all_from_the_ui_bakes_a_group_once(addon, tmp_path):
+    """The modal Bake All with both sheets queued: the group bakes from the first, and the
+    second, baked with it, is not baked again."""
+    import time
+    from blender_helpers import modal_harness
+    lower, upper = _pair(tmp_path, 0.01)
+    send, reports, _ = modal_harness(addon, addon.job.BakeJob(bpy.context, lower), queue=["Upper"])
+    try:
+        for _ in range(100000):
+            if (result := send("TIMER")) != {"RUNNING_MODAL"}:
+                break
+            time.sleep(0.001)
+    finally:
+        addon.operators._running.clear()
+    assert result == {"FINISHED"}, reports
+    baked = [t for _, t in reports if "baked" in t]
+    assert len(baked) == 1 and "'Lower' together with 'Upper'" in baked[0], baked
+    assert lower.thinburn.baked_file and upper.thinburn.baked_file
+
+
+def test_a_moving_sheet_of_a_group_is_refused_by_name(addon, tmp_path):
+    lower, upper = _pair(tmp_path, 0.01)
+    upper.keyframe_insert("location", frame=1)
+    upper.location.x += 0.01
+    upper.keyframe_insert("location", frame=10)
+    with pytest.raises(addon.inputs.BakeError, match="'Upper' bakes together with 'Lower'.*cannot move"):
+        _bake(addon, lower)
+    assert not lower.thinburn.baked_file  # nothing written, nothing hooked
+    assert not cache_file(tmp_path / "cache", "Lower.pc2.partial").exists()
