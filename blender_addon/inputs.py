@@ -11,7 +11,7 @@ import numpy as np
 
 from . import fields
 from .fields import FieldSpec
-from .properties import DYNAMIC_PARAMS
+from .properties import DYNAMIC_PARAMS, MODEL_PARAMS
 
 
 class BakeError(Exception):
@@ -388,3 +388,145 @@ def cache_path(obj, settings) -> tuple:
                         "Folder (Physics > ThinBurn > Cache)")
     shown = raw if raw.endswith(("/", "\\")) else raw + "/"
     return f"{shown}{stem}/{name}", os.path.join(folder, name)
+
+
+# --- sheets that heat each other bake together -----------------------------------------------------
+# Heat Ignites lights a cell from the fire particles' heat (eq. 2), and the particles rise about
+# a Flame Height above the burning edge before they cool (docs/heat.md). Two sheets whose world
+# bounding boxes come closer than HEAT_REACH + the larger Flame Height can heat each other, so
+# they bake as one simulation; further apart they bake alone, as before.
+HEAT_REACH = 0.05  # m, beyond the flames: the hot particles' sideways spread and the mesh's curl
+
+
+def heat_reach(settings) -> float:
+    """How close (m) another sheet must come to this one to bake with it."""
+    return HEAT_REACH + float(settings.flame_height)
+
+
+def world_box(obj) -> tuple:
+    """(min (3,), max (3,)) of the object's bounding box in the world now."""
+    m = np.array(obj.matrix_world, dtype=np.float64)
+    corners = np.array([tuple(c) for c in obj.bound_box], dtype=np.float64)
+    world = corners @ m[:3, :3].T + m[:3, 3]
+    return world.min(axis=0), world.max(axis=0)
+
+
+def box_gap(a, b) -> float:
+    """The distance between two axis-aligned boxes (0 when they overlap)."""
+    d = np.maximum(0.0, np.maximum(a[0] - b[1], b[0] - a[1]))
+    return float(np.linalg.norm(d))
+
+
+def heats_others(obj) -> bool:
+    s = obj.thinburn
+    return obj.type == "MESH" and s.enabled and s.heat_ignites and s.crumple
+
+
+def heat_group(scene, obj) -> list:
+    """The names of the sheets that bake with ``obj`` (``obj`` first, then the scene's order):
+    the enabled meshes with Heat Ignites (and Crumple) linked to it by chains of sheets whose
+    bounding boxes come within heat_reach of each other. Just ``obj`` when its Heat Ignites is
+    off."""
+    if not heats_others(obj):
+        return [obj.name]
+    sheets = [o for o in scene.objects if o is not obj and heats_others(o)]
+    boxes = {o.name: world_box(o) for o in [obj, *sheets]}
+    group, todo = [obj], [obj]
+    while todo:
+        here = todo.pop()
+        for o in sheets:
+            if o in group:
+                continue
+            reach = max(heat_reach(here.thinburn), heat_reach(o.thinburn))
+            if box_gap(boxes[here.name], boxes[o.name]) <= reach:
+                group.append(o)
+                todo.append(o)
+    order = {o.name: i for i, o in enumerate(scene.objects)}
+    rest = sorted((o.name for o in group[1:]), key=order.get)
+    return [obj.name, *rest]
+
+
+def group_geometry(objs) -> tuple:
+    """(world vertices, triangles, [(name, first vertex, vertex count, world matrix)]) of the
+    sheets' meshes concatenated in this order (each triangle's indices shifted by its offset)."""
+    worlds, tris, parts, offset = [], [], [], 0
+    for obj in objs:
+        world, t, mw = sheet_geometry(obj)
+        worlds.append(world)
+        tris.append(t + offset)
+        parts.append((obj.name, offset, len(world), mw))
+        offset += len(world)
+    return np.concatenate(worlds), np.concatenate(tris).astype(np.int32), parts
+
+
+def group_edges(objs) -> np.ndarray:
+    """(e, 2) edges of the concatenated meshes."""
+    out, offset = [], 0
+    for obj in objs:
+        out.append(mesh_edges(obj) + offset)
+        offset += len(obj.data.vertices)
+    return np.concatenate(out)
+
+
+# Painted maps of a group: a sheet without its own map takes the value that changes nothing.
+MAP_NEUTRAL = {"speed_map": 1.0, "fuel_map": 1.0, "ignite_map": 0.0}
+
+
+def group_vertex_map(objs, key: str):
+    """(n,) the sheets' painted maps concatenated, or None when none of them has one."""
+    maps = [vertex_map(obj, obj.thinburn, key) for obj in objs]
+    if all(m is None for m in maps):
+        return None
+    return np.concatenate([np.full(len(obj.data.vertices), MAP_NEUTRAL[key]) if m is None else m
+                           for obj, m in zip(objs, maps)])
+
+
+def group_pin_mask(objs):
+    """(n,) bool: each sheet's Pin Group concatenated, or None when none has one."""
+    if not any(obj.thinburn.pin_group for obj in objs):
+        return None
+    return np.concatenate([pin_mask(obj, obj.thinburn.pin_group) if obj.thinburn.pin_group
+                           else np.zeros(len(obj.data.vertices), dtype=bool) for obj in objs])
+
+
+def group_igniters(objs) -> list:
+    """Every igniter of the group's sheets (names, each once, none of the sheets themselves):
+    a sheet of a group needs no igniter of its own, as long as one of them has some."""
+    members = {obj.name for obj in objs}
+    names, errors = [], []
+    for obj in objs:
+        try:
+            found = igniter_objects(obj, obj.thinburn)
+        except BakeError as exc:
+            errors.append(exc)
+            continue
+        names += [n for n in found if n not in members and n not in names]
+    if not names and not any(obj.thinburn.ignite_map for obj in objs):
+        raise errors[0] if errors else BakeError(
+            f"no igniters: none of {', '.join(repr(o.name) for o in objs)} (they bake together) "
+            "has an Igniter collection with an Empty or a mesh in it")
+    return names
+
+
+# The settings a group bakes with come from the sheet it was baked from; these, when another
+# sheet of the group has them otherwise, are not used for it (the report says so).
+GROUP_SHARED = ("material", "cells", "crumple", "frame_start", "frame_end", "lattice",
+                "integrator", "seed", "front", "burn_duration", "floor_mode", "floor_height",
+                "floor_object", "wind_scale", "threads")
+
+
+def group_setting_warnings(lead, others) -> list:
+    """One line per sheet whose shared settings differ from ``lead``'s, naming them."""
+    props = lead.thinburn.bl_rna.properties
+    keys = list(GROUP_SHARED) + [p.identifier for p in props if p.identifier.startswith("mat_")]
+    keys += [k for k in (*MODEL_PARAMS, *DYNAMIC_PARAMS) if k not in keys]
+    out = []
+    for obj in others:
+        differ = [props[k].name for k in keys
+                  if props.get(k) is not None and getattr(obj.thinburn, k) != getattr(lead.thinburn, k)]
+        if differ:
+            out.append(f"'{obj.name}' burns together with '{lead.name}' as one simulation, with "
+                       f"'{lead.name}''s settings: its own {', '.join(differ)} "
+                       f"{'is' if len(differ) == 1 else 'are'} not used. Set them alike, or bake "
+                       f"from '{obj.name}' to use its settings for the group")
+    return out

@@ -102,8 +102,28 @@ def explain_core_error(text: str, lattice: int) -> str:
     return out
 
 
+class SheetCache:
+    """One sheet's share of a bake: its vertices [start, stop) of the simulation, its PC2
+    writer, and the map from the bake frame back to its own object space."""
+
+    def __init__(self, name, modifier_path, abs_path, start, stop, matrix, step, frame_start):
+        self.name, self.modifier_path, self.abs_path = name, modifier_path, abs_path
+        self.start, self.stop = start, stop
+        self.inverse = np.linalg.inv(matrix)
+        self.cache_step = int(step)
+        self.writer = cache.PC2Writer(abs_path, stop - start, start_frame=frame_start,
+                                      sample_rate=float(self.cache_step))
+        self.thinned = cache.ThinnedSamples(self.writer, self.cache_step)
+
+    def add(self, index: int, positions: np.ndarray) -> None:
+        inv = self.inverse
+        self.thinned.add(index, positions[self.start:self.stop] @ inv[:3, :3].T + inv[:3, 3])
+
+
 class BakeJob:
-    """Bake ``obj`` frame by frame; the previous bake is replaced only when all frames are in."""
+    """Bake ``obj`` frame by frame; the previous bake is replaced only when all frames are in.
+    With Heat Ignites, the sheets within heat's reach of it (inputs.heat_group) bake with it as
+    one simulation, each into its own cache."""
 
     def __init__(self, context, obj):
         self.obj_name = obj.name
@@ -120,29 +140,44 @@ class BakeJob:
         self.frames = list(range(settings.frame_start, settings.frame_end + 1))
         self.fps = self.scene.render.fps / self.scene.render.fps_base
         self.dt = 1.0 / self.fps
-        self.igniters = inputs.igniter_objects(obj, settings)
         self.winds = inputs.wind_objects(context.view_layer)
-        self.flames = inputs.flame_igniters(self.igniters)
         self.frame_restore = self.scene.frame_current
-        # The sheet's rest state (its transform, the floor) is read at the first frame.
+        # The sheet's rest state (its transform, the floor, who is near) is read at the first frame.
         self.scene.frame_set(self.frames[0])
+        self.sheets = []
         try:
-            world, tris, self.matrix = inputs.sheet_geometry(obj)
-            kwargs = self._simulation_kwargs(obj, settings)
+            self.members = inputs.heat_group(self.scene, obj)
+            self.grouped = len(self.members) > 1
+            objs = [bpy.data.objects[n] for n in self.members]
+            if self.grouped:
+                self._check_group(objs)
+                self.igniters = inputs.group_igniters(objs)
+                world, tris, parts = inputs.group_geometry(objs)
+                self.matrix = np.eye(4)  # a group bakes in the world
+            else:
+                self.igniters = inputs.igniter_objects(obj, settings)
+                world, tris, self.matrix = inputs.sheet_geometry(obj)
+                parts = [(obj.name, 0, len(world), self.matrix)]
+            self.flames = inputs.flame_igniters(self.igniters)
+            kwargs = self._simulation_kwargs(obj, settings, objs)
             self.floor = kwargs.get("floor")  # where the ash flakes land, too
             _check_floor(obj, world, self.floor, settings)
-            self.modifier_path, self.abs_path = inputs.cache_path(obj, settings)
-            self.cache_step = int(settings.cache_step)
-            self.writer = cache.PC2Writer(self.abs_path, len(world), start_frame=float(self.frames[0]),
-                                          sample_rate=float(self.cache_step))
-            self.thinned = cache.ThinnedSamples(self.writer, self.cache_step)
+            for (name, first, count, mw), member in zip(parts, objs):
+                paths = inputs.cache_path(member, member.thinburn)
+                self.sheets.append(SheetCache(name, *paths, first, first + count, mw,
+                                              member.thinburn.cache_step, float(self.frames[0])))
         except OSError as exc:
+            self._abort_writers()
             self._restore_frame()
             raise BakeError(f"cannot write the cache file in '{settings.cache_dir}': "
                             f"{exc.strerror or exc}") from None
         except BakeError:
+            self._abort_writers()
             self._restore_frame()
             raise
+        self.modifier_path = self.sheets[0].modifier_path
+        self.abs_path = self.sheets[0].abs_path
+        self.cache_step = self.sheets[0].cache_step
         self.n_vertices = len(world)
         self.inverse = np.linalg.inv(self.matrix)
         # Igniter paths are sampled half a cell apart: an estimate until the core says.
@@ -150,9 +185,11 @@ class BakeJob:
         self.lattice = int(settings.lattice)
         self.max_strain = self.max_strain_frame = None  # set when a moving bake finishes
         self.shape = None  # what the core made of the sheet (worker.simulation_shape)
-        self.stretch = stretch.StretchMeter(world, inputs.mesh_edges(obj)) if self.shell else None
+        edges = inputs.group_edges(objs) if self.grouped else inputs.mesh_edges(obj)
+        self.stretch = stretch.StretchMeter(world, edges) if self.shell else None
         self.want_particles = core_has_particles() and self.shell
         self.particle_frames = []
+        self.particle_owners = []  # a group's: which sheet's fire each particle is (its index)
         self.samples = {}
         self.next_sample = 0      # index of the next frame to sample
         self.next_task = 0        # index of the next frame to hand to the worker
@@ -164,6 +201,8 @@ class BakeJob:
         self.message = ""
         # What the bake ignores, in an artist's words (the report shows them).
         self.warnings = inputs.wind_warnings(context.view_layer)
+        if self.grouped:
+            self.warnings += inputs.group_setting_warnings(obj, objs[1:])
         if self.flames and not settings.heat_ignites:
             self.warnings.append(
                 f"{', '.join(repr(n) for n in self.flames)} {'is a Flame' if len(self.flames) == 1 else 'are Flames'}: "
@@ -186,7 +225,25 @@ class BakeJob:
         self.worker.start()
 
     # --- setup -------------------------------------------------------------------------------
-    def _simulation_kwargs(self, obj, settings) -> dict:
+    def _check_group(self, objs) -> None:
+        """A group bakes in the world, so its sheets must keep still (a lone sheet's animated
+        transform is followed: moving.py)."""
+        for member in objs:
+            what = inputs.transform_animation(member)
+            if what:
+                others = ", ".join(repr(o.name) for o in objs if o is not member)
+                raise BakeError(
+                    f"'{member.name}' bakes together with {others} (Heat Ignites: they are close "
+                    f"enough to heat each other), and sheets baked together cannot move ({what}): "
+                    "remove the animation, untick Heat Ignites on one of them (Physics > "
+                    "ThinBurn), or move them further apart")
+
+    def _vertex_map(self, obj, objs, key):
+        if self.grouped:
+            return inputs.group_vertex_map(objs, key)
+        return inputs.vertex_map(obj, obj.thinburn, key)
+
+    def _simulation_kwargs(self, obj, settings, objs) -> dict:
         kwargs = dict(material=properties.build_material(settings), cells=settings.cells,
                       seed=settings.seed, front=settings.front,
                       threads=settings.threads or None)
@@ -200,10 +257,11 @@ class BakeJob:
             kwargs["lattice"] = settings.lattice or None
             self.dynamics = inputs.dynamics(self.scene, settings)
             kwargs.update(self.dynamics)
-        if settings.pin_group:
+        if any(o.thinburn.pin_group for o in objs):
             if not core_supports("pinned"):
                 raise BakeError("this thinburn core cannot pin vertices yet: clear the Pin Group")
-            kwargs["pinned"] = inputs.pin_mask(obj, settings.pin_group)
+            kwargs["pinned"] = (inputs.group_pin_mask(objs) if self.grouped
+                                else inputs.pin_mask(obj, settings.pin_group))
         if self.flames and not self.shell:
             raise BakeError(f"the Flame igniter {', '.join(repr(n) for n in self.flames)} burns as "
                             "fire particles, which need Crumple on: tick Crumple, or set its Kind "
@@ -216,10 +274,10 @@ class BakeJob:
         if settings.burn_duration > 0:
             kwargs["finish_within"] = float(settings.burn_duration)
         for key in ("speed_map", "fuel_map"):
-            values = inputs.vertex_map(obj, settings, key)
+            values = self._vertex_map(obj, objs, key)
             if values is not None:
                 kwargs[key] = values
-        self.ignite_values = inputs.vertex_map(obj, settings, "ignite_map")
+        self.ignite_values = self._vertex_map(obj, objs, "ignite_map")
         self.ignite_index = None
         if self.ignite_values is not None:
             if not settings.frame_start <= settings.ignite_frame <= settings.frame_end:
@@ -249,7 +307,8 @@ class BakeJob:
 
     def status_text(self) -> str:
         """The status bar's line during a UI bake: sheet, frame, percentage, ETA."""
-        return (f"ThinBurn: baking '{self.obj_name}' frame {self.current_frame} of "
+        with_ = "".join(f" with '{n}'" if i == 0 else f", '{n}'" for i, n in enumerate(self.members[1:]))
+        return (f"ThinBurn: baking '{self.obj_name}'{with_} frame {self.current_frame} of "
                 f"{self.frames[0]}–{self.frames[-1]} ({100 * self.progress:.0f} %, ETA "
                 f"{self.eta_text()})  (Esc to cancel)")
 
@@ -276,7 +335,7 @@ class BakeJob:
         """Stop now; the previous bake (file, modifier, attributes) stays as it was."""
         self.worker.cancel()
         self.worker.join(timeout=30.0)
-        self.writer.abort()
+        self._abort_writers()
         self._restore_frame()
         self.finished = True
 
@@ -306,7 +365,7 @@ class BakeJob:
     def _follow(self, k: int, sample) -> None:
         """Record frame k's map from the bake frame to the world; a floor must stay level in
         the bake frame (the core's floor is z = const there)."""
-        F = moving.frame_map(sample.matrix, self.inverse)
+        F = np.eye(4) if self.grouped else moving.frame_map(sample.matrix, self.inverse)
         self.frame_maps[k] = F
         if self.floor is not None and not moving.keeps_floor(F):
             obj = bpy.data.objects[self.obj_name]
@@ -370,12 +429,15 @@ class BakeJob:
                 _, index, positions, lit, particles = msg
                 if self.stretch is not None:
                     self.stretch.add(positions, self.frames[index])
-                self.thinned.add(index, self._to_local(positions))
+                for sheet in self.sheets:
+                    sheet.add(index, positions)
                 self.lit += lit
                 if particles is not None:  # to the world: the fire objects do not move
                     pts, temps = particles
                     F = self.frame_maps[index]
                     self.particle_frames.append((moving.to_world(F, pts).astype(np.float32), temps))
+                    if self.grouped:
+                        self.particle_owners.append(self._nearest_sheet(positions, pts))
                 self.frames_done = index + 1
                 if block and self.next_task < len(self.frames):
                     return  # let run() sample more
@@ -384,9 +446,20 @@ class BakeJob:
             elif kind == "error":
                 self._fail(explain_core_error(msg[1], self.lattice))
 
-    def _to_local(self, world: np.ndarray) -> np.ndarray:
-        inv = self.inverse
-        return world @ inv[:3, :3].T + inv[:3, 3]
+    def _nearest_sheet(self, positions: np.ndarray, pts: np.ndarray) -> np.ndarray:
+        """(k,) for each fire particle the index of the sheet whose bounding box (now) is
+        nearest: its flames show with that sheet's fire and go when that sheet is freed."""
+        pts = np.asarray(pts, dtype=np.float64).reshape(-1, 3)
+        gaps = []
+        for sheet in self.sheets:
+            part = positions[sheet.start:sheet.stop]
+            lo, hi = part.min(axis=0), part.max(axis=0)
+            gaps.append(np.linalg.norm(np.maximum(0.0, np.maximum(lo - pts, pts - hi)), axis=1))
+        return np.argmin(np.stack(gaps), axis=0)
+
+    def _abort_writers(self) -> None:
+        for sheet in self.sheets:
+            sheet.writer.abort()
 
     def _fail(self, text: str) -> None:
         self.cancel()
@@ -399,33 +472,26 @@ class BakeJob:
     # --- results -----------------------------------------------------------------------------
     def _finish(self, ignite_s: np.ndarray, burnout_s: np.ndarray) -> None:
         self.worker.join(timeout=30.0)
-        obj = bpy.data.objects.get(self.obj_name)
-        if obj is None:
-            self._fail(f"the sheet '{self.obj_name}' was deleted during the bake")
-        self.thinned.finish(len(self.frames) - 1)
-        self.writer.commit()
+        objs = []
+        for name in self.members:
+            obj = bpy.data.objects.get(name)
+            if obj is None:
+                self._fail(f"the sheet '{name}' was deleted during the bake")
+            objs.append(obj)
+        for sheet in self.sheets:
+            sheet.thinned.finish(len(self.frames) - 1)
+            sheet.writer.commit()
         start = float(self.frames[0])
         ignite = cache.seconds_to_frames(ignite_s, start, self.fps)
         burnout = cache.seconds_to_frames(burnout_s, start, self.fps)
-        materials.apply_bake(obj, self.modifier_path, start, ignite, burnout, self.floor)
-        # Keep Every k: sample j of the file is frame Start + j k. The Mesh Cache modifier reads
-        # sample (Frame Scale × frame − Frame Start) and blends between samples (its source,
-        # MOD_meshcache.cc), so Frame Scale = 1/k and Frame Start = Start/k.
-        md = obj.modifiers[materials.CACHE_MODIFIER]
-        md.frame_scale = 1.0 / self.cache_step
-        md.frame_start = start / self.cache_step
-        if self.want_particles:
-            fire.apply_particles(obj, self.modifier_path, self.particle_frames, start)
-        obj.thinburn.baked_file = self.modifier_path
-        obj.thinburn.baked_shape = "" if self.shape is None else describe_shape(self.shape)
-        obj.thinburn.baked_strain = 0.0
-        materials.record_bake(obj)
+        for k, (sheet, obj) in enumerate(zip(self.sheets, objs)):
+            self._apply(obj, sheet, start, ignite[sheet.start:sheet.stop],
+                        burnout[sheet.start:sheet.stop], self._particles_of(k))
         self._restore_frame()
         self.finished = True
         self.elapsed = _time.perf_counter() - self.started
         ignited = int(np.count_nonzero(ignite < cache.NEVER_FRAME))
-        self.message = (f"ThinBurn: baked '{self.obj_name}' frames {self.frames[0]}–{self.frames[-1]} "
-                        f"in {self.elapsed:.1f} s; {ignited} of {self.n_vertices} vertices caught fire")
+        self.message = self._summary(ignite, ignited)
         if self.shape is not None:
             self.message += "; " + describe_shape(self.shape)
         if ignited == 0:
@@ -433,9 +499,45 @@ class BakeJob:
         if self.stretch is not None:
             worst, at = self.stretch.largest(burnout)
             self.max_strain, self.max_strain_frame = worst, at
-            obj.thinburn.baked_strain = worst
+            for obj in objs:
+                obj.thinburn.baked_strain = worst
             text = stretch.stretch_warning(self.obj_name, worst, at, self.lattice)
             if text:
                 self.warnings.append(text)
         if self.tilt > TILT_WARNING_DEG:
             self.warnings.append(inputs.tilt_warning(self.obj_name, self.tilt))
+
+    def _apply(self, obj, sheet: SheetCache, start: float, ignite, burnout, particles) -> None:
+        """Hook one sheet's share of the bake onto it: its PC2, attributes and fire."""
+        materials.apply_bake(obj, sheet.modifier_path, start, ignite, burnout, self.floor)
+        # Keep Every k: sample j of the file is frame Start + j k. The Mesh Cache modifier reads
+        # sample (Frame Scale × frame − Frame Start) and blends between samples (its source,
+        # MOD_meshcache.cc), so Frame Scale = 1/k and Frame Start = Start/k.
+        md = obj.modifiers[materials.CACHE_MODIFIER]
+        md.frame_scale = 1.0 / sheet.cache_step
+        md.frame_start = start / sheet.cache_step
+        if self.want_particles:
+            fire.apply_particles(obj, sheet.modifier_path, particles, start)
+        obj.thinburn.baked_file = sheet.modifier_path
+        obj.thinburn.baked_shape = "" if self.shape is None else describe_shape(self.shape)
+        obj.thinburn.baked_strain = 0.0
+        materials.record_bake(obj)
+
+    def _particles_of(self, k: int) -> list:
+        """Sheet k's fire particles, frame by frame (a lone sheet has them all)."""
+        if not self.grouped:
+            return self.particle_frames
+        return [(pts[own == k], temps[own == k])
+                for (pts, temps), own in zip(self.particle_frames, self.particle_owners)]
+
+    def _summary(self, ignite, ignited: int) -> str:
+        frames = f"frames {self.frames[0]}–{self.frames[-1]} in {self.elapsed:.1f} s"
+        if not self.grouped:
+            return (f"ThinBurn: baked '{self.obj_name}' {frames}; {ignited} of {self.n_vertices} "
+                    "vertices caught fire")
+        others = ", ".join(repr(n) for n in self.members[1:])
+        each = ", ".join(
+            f"'{sheet.name}' {int(np.count_nonzero(ignite[sheet.start:sheet.stop] < cache.NEVER_FRAME))}"
+            f" of {sheet.stop - sheet.start}" for sheet in self.sheets)
+        return (f"ThinBurn: baked '{self.obj_name}' together with {others} (Heat Ignites: they are "
+                f"close enough to heat each other) {frames}; vertices that caught fire: {each}")

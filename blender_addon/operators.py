@@ -108,14 +108,17 @@ class BakeSheets:
     def execute(self, context):
         names = self._targets(context)
         stream = sys.stderr if bpy.app.background else None
-        baked = 0
+        baked, together = 0, set()
         for name in names:
+            if name in together:
+                continue  # baked already, with a sheet it heats (inputs.heat_group)
             try:
                 job = bake_now(context, bpy.data.objects[name], stream=stream)
             except BakeError as exc:
                 self._fail(name, exc)
                 continue
             baked += 1
+            together.update(job.members)
             report_bake(self, job)
         return {"FINISHED"} if baked else {"CANCELLED"}
 
@@ -194,6 +197,8 @@ def _start_next(op, context) -> bool:
     none is left."""
     queue = getattr(op, "_queue", None) or []
     _running.pop(context.scene.name, None)
+    done = getattr(getattr(op, "_job", None), "members", ())
+    queue[:] = [n for n in queue if n not in done]  # baked already, with a sheet it heats
     while queue:
         name = queue.pop(0)
         try:
