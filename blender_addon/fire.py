@@ -587,7 +587,7 @@ def apply_particles(obj, sheet_pc2_path: str, frames, frame_start: float) -> Non
 
 # --- EEVEE's flame light -----------------------------------------------------------------------
 LAMPS = 4              # point lights per sheet, one per quarter of the fire around its centre
-LAMP_POWER = 0.0015    # W per unit of flame weight (T/T0)^4 at Intensity 1 (see docs/blender.md)
+LAMP_POWER = 0.00065   # W per unit of flame weight (T/T0)^4 at Intensity 1 (see docs/blender.md)
 LAMP_LIFT = 0.5        # of Flame Height: the lamps sit in the flames, above their particles
 LAMP_RADIUS = 0.02     # m: soft shadows, as from a flame's width
 

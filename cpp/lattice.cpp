@@ -176,8 +176,7 @@ Embedding FfdLattice::embed(const RowMatX3& params, const RowMatX3& rest_points,
                                 std::to_string(rest_points.rows()));
   if (!rest_points.allFinite()) throw std::invalid_argument("rest_points must be finite");
   if (M_ == 0) throw std::invalid_argument("embed: this lattice follows a control surface, not a grid");
-  const bool spline = interp == LatticeInterp::QuadraticBSpline && M_ >= 3;
-  const int side = spline ? 3 : 2;
+  const int side = interp == LatticeInterp::QuadraticBSpline && M_ >= 3 ? 3 : 2;
   Embedding e;
   e.stencil = side * side;
   const Eigen::Index n = params.rows();
@@ -190,17 +189,26 @@ Embedding FfdLattice::embed(const RowMatX3& params, const RowMatX3& rest_points,
     const double s = checked_param(params(p, 0), hi, "s", p);
     const double t = checked_param(params(p, 1), hi, "t", p);
     e.r(p) = checked_param(params(p, 2), 1.0, "r", p);
-    const Axis1D ai = spline ? bspline_axis(s, M_) : linear_axis(s, M_);
-    const Axis1D aj = spline ? bspline_axis(t, M_) : linear_axis(t, M_);
-    for (int a = 0; a < side; ++a)
-      for (int b = 0; b < side; ++b) {
-        const std::size_t slot = std::size_t(p) * e.stencil + a * side + b;
-        const int couple = (ai.base + a) * M_ + (aj.base + b);
-        e.couple[slot] = couple;
-        e.weight[slot] = ai.w[a] * aj.w[b];
-      }
+    const std::size_t slot = std::size_t(p) * e.stencil;
+    plane_stencil(s, t, interp, e.couple.data() + slot, e.weight.data() + slot);
   }
   return e;
+}
+
+int FfdLattice::plane_stencil(double s, double t, LatticeInterp interp, int* couple, double* w) const {
+  if (M_ == 0) throw std::invalid_argument("plane_stencil: this lattice follows a control surface, not a grid");
+  const bool spline = interp == LatticeInterp::QuadraticBSpline && M_ >= 3;
+  const int side = spline ? 3 : 2;
+  s = std::clamp(s, 0.0, double(M_ - 1));
+  t = std::clamp(t, 0.0, double(M_ - 1));
+  const Axis1D ai = spline ? bspline_axis(s, M_) : linear_axis(s, M_);
+  const Axis1D aj = spline ? bspline_axis(t, M_) : linear_axis(t, M_);
+  for (int a = 0; a < side; ++a)
+    for (int b = 0; b < side; ++b) {
+      couple[a * side + b] = (ai.base + a) * M_ + (aj.base + b);
+      w[a * side + b] = ai.w[a] * aj.w[b];
+    }
+  return side * side;
 }
 
 void FfdLattice::deform(const Embedding& e, Eigen::Ref<RowMatX3> out, double z_min) const {

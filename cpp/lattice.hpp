@@ -69,6 +69,11 @@ class FfdLattice {
   Embedding embed(const RowMatX3& params, const RowMatX3& rest_points,
                   LatticeInterp interp = LatticeInterp::Trilinear) const;
 
+  /// @brief One point's in-plane stencil at lattice coordinates (s, t) (clamped to the
+  /// lattice): couples (i * M + j) and weights, 4 (trilinear) or 9 (B-spline); returns the count.
+  /// The weights embed() gives that point.
+  int plane_stencil(double s, double t, LatticeInterp interp, int* couple, double* w) const;
+
   /// @brief Deformed positions of embedded points (n x 3, preallocated) from the current
   /// control positions. Each control vertex's displacement is computed once per call into a
   /// table owned by the calling thread (allocated on its first call, reused after); then

@@ -51,7 +51,14 @@ Shell::Shell(const Sheet& sheet, const ShellParams& params, const std::vector<do
     const Eigen::Vector2d st = sheet.lattice_st(vp(i, 0), vp(i, 1), M_);
     coords.row(i) << st.x(), st.y(), 0.5;
   }
-  vertex_embedding_ = lattice_->embed(coords, sheet.vertices());
+  // A flat sheet takes the quadratic B-spline, C1 across control cells: the trilinear map
+  // kinks there, and the A4 demo's faces away from the fire met at up to 10.5 degrees (silk
+  // held at its corners: 28.6), 1.35 (3.4) with the spline (scripts/shell_smoothness.py;
+  // issue #12's facets). A sheet that is not flat on its grid (geometry="plane" over a folded
+  // sheet's UV map) keeps the trilinear map: the spline approximates rather than interpolates,
+  // and it would round the fold off (its edges shrank to 0.76 in a free fall).
+  mesh_interp_ = rest_is_flat() ? LatticeInterp::QuadraticBSpline : LatticeInterp::Trilinear;
+  vertex_embedding_ = lattice_->embed(coords, sheet.vertices(), mesh_interp_);
   cell_area_.assign(N * N, sheet.du() * sheet.dv());
   // Eq 3 sums over the ignition points, the burning cells: the same fire at twice the grid
   // resolution has four times the points. Each cell counts as its share of a cell of the
@@ -259,6 +266,15 @@ void Shell::pin(const std::vector<std::uint8_t>& pinned) {
   dynamics_->set_pinned(held);
 }
 
+bool Shell::rest_is_flat() const {
+  // Every couple's rest direction (bottom -> top) along the first one's, to rounding.
+  const RowMatX3& r = lattice_->rest();
+  const Eigen::Vector3d n0 = (r.row(1) - r.row(0)).normalized().transpose();
+  for (Eigen::Index c = 0; 2 * c + 1 < r.rows(); ++c)
+    if ((r.row(2 * c + 1) - r.row(2 * c)).normalized().dot(n0.transpose()) < 1.0 - 1e-9) return false;
+  return true;
+}
+
 void Shell::bilinear_couples(double s, double t, int* couple, double* w) const {
   const int i0 = std::clamp(static_cast<int>(std::floor(s)), 0, M_ - 2);
   const int j0 = std::clamp(static_cast<int>(std::floor(t)), 0, M_ - 2);
@@ -308,15 +324,17 @@ void Shell::cell_couples(int cell, int* couple, double* w) const {
 Eigen::Vector3d Shell::cell_position(int cell) const {
   if (control_) return control_->point(surface_cells_, cell, lattice_->positions());
   // Rest position plus the lattice's displacement at the cell centre, mid-thickness: the same
-  // trilinear FFD as the mesh's vertices, evaluated for one point on demand, so only the cells
-  // the front and the emitters touch are ever deformed.
+  // FFD as the mesh's vertices, evaluated for one point on demand, so only the cells the front
+  // and the emitters touch are ever deformed.
   Eigen::Vector3d p = sheet_->cell_rest().row(cell).transpose();
-  int cp[4];
-  double w[4];
-  cell_couples(cell, cp, w);
+  const int N = sheet_->cells();
+  const Eigen::Vector2d st = sheet_->lattice_st((cell % N + 0.5) * sheet_->du(), (cell / N + 0.5) * sheet_->dv(), M_);
+  int cp[9];
+  double w[9];
+  const int n = lattice_->plane_stencil(st.x(), st.y(), mesh_interp_, cp, w);
   const RowMatX3& x = lattice_->positions();
   const RowMatX3& x0 = lattice_->rest();
-  for (int k = 0; k < 4; ++k)
+  for (int k = 0; k < n; ++k)
     p += (0.5 * w[k]) * (x.row(2 * cp[k]) - x0.row(2 * cp[k]) + x.row(2 * cp[k] + 1) - x0.row(2 * cp[k] + 1)).transpose();
   return p;
 }
@@ -328,7 +346,8 @@ Eigen::Vector3d Shell::cell_normal(int cell) const {
 
 void Shell::quad_displacement_bounds(RowMatX3& lo, RowMatX3& hi) const {
   if (control_) throw std::logic_error("quad_displacement_bounds: a control surface has no grid quads");
-  // A quad's cells move by convex combinations of its four couples' mid-layer displacements.
+  // A quad's cells move by convex combinations (the spline's weights are >= 0 and sum to 1) of
+  // the mid-layer displacements of the couples within one of its corners (its 4 x 4 block).
   const RowMatX3& x = lattice_->positions();
   const RowMatX3& x0 = lattice_->rest();
   const int q = M_ - 1;
@@ -336,13 +355,14 @@ void Shell::quad_displacement_bounds(RowMatX3& lo, RowMatX3& hi) const {
   hi.resize(q * q, 3);
   for (int i = 0; i < q; ++i)
     for (int j = 0; j < q; ++j) {
-      const int corner[4] = {i * M_ + j, i * M_ + j + 1, (i + 1) * M_ + j, (i + 1) * M_ + j + 1};
       Eigen::RowVector3d l = Eigen::RowVector3d::Constant(std::numeric_limits<double>::infinity()), h = -l;
-      for (int c : corner) {
-        const Eigen::RowVector3d d = 0.5 * (x.row(2 * c) - x0.row(2 * c) + x.row(2 * c + 1) - x0.row(2 * c + 1));
-        l = l.cwiseMin(d);
-        h = h.cwiseMax(d);
-      }
+      for (int ii = std::max(0, i - 1); ii <= std::min(M_ - 1, i + 2); ++ii)
+        for (int jj = std::max(0, j - 1); jj <= std::min(M_ - 1, j + 2); ++jj) {
+          const int c = ii * M_ + jj;
+          const Eigen::RowVector3d d = 0.5 * (x.row(2 * c) - x0.row(2 * c) + x.row(2 * c + 1) - x0.row(2 * c + 1));
+          l = l.cwiseMin(d);
+          h = h.cwiseMax(d);
+        }
       lo.row(i * q + j) = l;
       hi.row(i * q + j) = h;
     }

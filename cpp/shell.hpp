@@ -108,6 +108,7 @@ class Shell {
  private:
   RowMatX3 drape() const;
   void bilinear_couples(double s, double t, int* couple, double* w) const;
+  bool rest_is_flat() const;
   template <class F>
   void for_cell_shares(int cell, F&& f) const;  // f(couple, share) over the couples carrying the cell
   void add_cell_mass(int cell, double dm);
@@ -131,6 +132,7 @@ class Shell {
   std::vector<Eigen::Matrix3d> piece_rotation_;  // per piece: its rigid rotation since rest
   ShellParams params_;
   int M_ = 0;
+  LatticeInterp mesh_interp_ = LatticeInterp::Trilinear;  // in-plane FFD of a grid lattice's mesh and cells
   double thickness_ = 0.0;
   std::unique_ptr<FfdLattice> lattice_;
   std::unique_ptr<LatticeDynamics> dynamics_;

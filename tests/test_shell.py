@@ -128,16 +128,17 @@ def test_a_burning_shell_crumples_without_leaving_its_layer_or_stretching(shape)
 
 
 def test_paper_lit_at_a_corner_curls_at_the_edge_and_stays_flat_elsewhere():
-    # Issue #12's default: over 40 s the unburnt paper rises at most 1.1 cm above the table
-    # (measured 0.98 cm) and its edges keep their length within 0.5 % (p99, measured 0.42 %;
-    # 6.9 % at the old defaults, which rolled the sheet into a tube).
+    # Issue #12's default: over 40 s the unburnt paper rises at most 1.2 cm above the table
+    # (measured 1.08 cm) and its edges keep their length within 0.7 % (p99, measured 0.57 %
+    # with the B-spline embedding, 0.42 % with the trilinear one that kinked at control cells;
+    # 6.9 % at the old defaults, which rolled the sheet into a tube). Issue #12 asks for 1 %.
     from thinburn.scenes import rect_sheet
 
     V, F = rect_sheet()
     sim, strain, _, rise = _burn_shell(V, F, [0.0, 0.0, 0.0], floor=0.0)
     assert sim.geometry == "plane"
-    assert strain < 0.005
-    assert rise < 0.011
+    assert strain < 0.007
+    assert rise < 0.012
 
 
 def test_a_stack_of_sheets_closer_than_its_couples_keeps_each_sheet_in_its_own_lattice():
@@ -163,3 +164,25 @@ def test_a_stack_of_sheets_closer_than_its_couples_keeps_each_sheet_in_its_own_l
         worst = max(worst, np.abs(np.linalg.norm(P[E[:, 0]] - P[E[:, 1]], axis=1) / l0 - 1).max())
     assert sim.geometry == "surface"
     assert worst < 0.006
+
+
+@pytest.mark.parametrize("material, bound", [("paper", 2.0), ("silk", 4.5)])
+def test_no_lattice_facets_away_from_the_fire(material, bound):
+    """Issue #12 item 2: adjacent faces of a fine mesh (edges well under a quarter of a control
+    cell) away from the fire (unburnt, 3 cm from any char) meet at small angles. The demo
+    scenes at 64 cells (5 x 5 couples), every 10 s for 40 s. Measured max: paper 1.35 degrees,
+    silk held at its corners 3.4 (with the trilinear embedding, which kinks at the control
+    cells: 10.5 and 28.6; the issue's limit is 15)."""
+    from thinburn._mesh_measures import dihedral_angles, face_adjacency, far_from_fire
+    scene = default_scene(material)
+    sim = build(scene, material, cells=64)
+    pairs = face_adjacency(scene.faces)
+    worst = 0.0
+    for _ in range(4):
+        sim.run(10.0, dt=1 / 24)
+        keep = far_from_fire(scene.vertices, scene.faces, sim.vertex_char(), 0.03)
+        sel = keep[pairs[:, 0]] & keep[pairs[:, 1]]
+        assert sel.sum() > 3000
+        worst = max(worst, dihedral_angles(sim.vertex_positions(), scene.faces, pairs[sel]).max())
+    assert np.abs(sim.vertex_positions() - scene.vertices).max() > 0.005  # it did move
+    assert worst < bound

@@ -314,9 +314,10 @@ def test_params_are_a_read_only_view_of_the_live_values(a4):
 def test_one_big_implicit_step_stays_within_reach_of_the_pin(dt):
     # Repro r4: cloth 1 m x 2 m pinned at a corner cannot reach farther than its diagonal
     # (2.24 m); it reached 2.65 m at dt = 1 s and 9.45 m at 10 s (edges stretched ~10x, one
-    # substep). An implicit step that ends with a spring overstretched (by 5 %) is now redone
-    # with more substeps: measured 0.962, 0.988 and 1.016 diagonals at dt = 1, 2, 10 s (14, 35,
-    # 176 substeps; worst spring strain 2.3, 3.8, 4.4 %). At dt = 1/24 s it keeps 1.000.
+    # substep). An implicit step that ends with a spring strained by more than 1 % (and 1.5x
+    # its start) is now redone with more substeps: measured 0.944, 1.003 and 1.016 diagonals at
+    # dt = 1, 2, 10 s (198, 875, 4400 substeps; worst spring strain 2.2, 4.1, 4.4 %, where the
+    # cloth's own sag sits). At dt = 1/24 s it keeps 1.000.
     v, f = rect_sheet(1.0, 2.0, nx=6, ny=11)
     sim = thinburn.Simulation(v, f, material="cloth", cells=16, pinned=[0])
     sim.step(dt)
@@ -410,3 +411,16 @@ def test_a_curling_sheet_never_passes_through_itself(name, seconds):
             crossed.append(frame)
     assert crossed == []
     assert np.abs(sim.vertex_positions() - scene.vertices).max() > 0.005  # it did move
+
+
+@pytest.mark.parametrize("wind", [None, 3.0])
+def test_implicit_and_symplectic_agree_on_paper_on_its_table(wind):
+    """Issue #12: the two integrators agree at dt = 1/24 s on the A4 demo (cells 64, 20 s), with
+    and without a 3 m/s wind: the RMS distance between their meshes over the implicit run's RMS
+    motion, measured 3.0 % and 1.9 % (the issue allows 15 %). Before friction acted before each
+    symplectic substep's move (and inside the implicit solve), the symplectic sheet crept 9 mm
+    and the implicit one 0.39 m across the table in the wind."""
+    from thinburn._bench_motion import motion_run, relative_error
+    rest, implicit, _ = motion_run("paper", wind, "implicit", 1 / 24, 20.0)
+    _, symplectic, _ = motion_run("paper", wind, "symplectic", 1 / 24, 20.0)
+    assert relative_error(symplectic, implicit, rest) < 0.045

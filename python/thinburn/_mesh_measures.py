@@ -1,0 +1,34 @@
+"""Measures of a deformed mesh used by tests and scripts: adjacent faces, the angle between them
+(facets), and the faces far from the fire."""
+from __future__ import annotations
+
+import numpy as np
+
+
+def face_adjacency(faces):
+    """Pairs of faces sharing an edge."""
+    e = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
+    e = np.sort(e, 1)
+    fid = np.tile(np.arange(len(faces)), 3)
+    order = np.lexsort((e[:, 1], e[:, 0]))
+    e, fid = e[order], fid[order]
+    same = np.all(e[1:] == e[:-1], axis=1)
+    return np.stack([fid[:-1][same], fid[1:][same]], 1)
+
+
+def dihedral_angles(x, faces, pairs):
+    n = np.cross(x[faces[:, 1]] - x[faces[:, 0]], x[faces[:, 2]] - x[faces[:, 0]])
+    n /= np.linalg.norm(n, axis=1, keepdims=True)
+    c = np.clip((n[pairs[:, 0]] * n[pairs[:, 1]]).sum(1), -1.0, 1.0)
+    return np.degrees(np.arccos(c))
+
+
+def far_from_fire(rest, faces, char, distance):
+    """Faces whose vertices are all unburnt and >= distance from every charred vertex."""
+    burnt = rest[char > 0.0]
+    if len(burnt) == 0:
+        ok = np.ones(len(rest), bool)
+    else:
+        d = np.sqrt(((rest[:, None, :2] - burnt[None, ::7, :2]) ** 2).sum(-1)).min(1)
+        ok = (char == 0.0) & (d >= distance)
+    return ok[faces].all(1)
