@@ -530,3 +530,82 @@ def group_setting_warnings(lead, others) -> list:
                        f"{'is' if len(differ) == 1 else 'are'} not used. Set them alike, or bake "
                        f"from '{obj.name}' to use its settings for the group")
     return out
+
+
+# --- collision objects ----------------------------------------------------------------------------
+# Blender's cloth collision takes cloth_friction * 0.01 times the normal speed change off the
+# tangential speed (collision.cc, cloth_collision_response_static): a Coulomb coefficient of
+# cloth_friction / 100, which is what the core's colliders take.
+CLOTH_FRICTION_SCALE = 0.01
+
+
+def _collision_modifier(ob):
+    return next((m for m in ob.modifiers if m.type == "COLLISION" and m.show_viewport), None)
+
+
+def collision_objects(view_layer, sheet_name: str) -> list:
+    """Names of the meshes in the view layer with Blender's Collision physics (a Collision
+    modifier), the sheet itself excepted."""
+    return [o.name for o in view_layer.objects
+            if o.name != sheet_name and o.type == "MESH" and _collision_modifier(o) is not None]
+
+
+def closed_mesh(tris: np.ndarray) -> bool:
+    """Every edge in exactly two triangles (what a collider mesh must be)."""
+    e = np.sort(np.concatenate([tris[:, [0, 1]], tris[:, [1, 2]], tris[:, [2, 0]]]), axis=1)
+    _, counts = np.unique(e, axis=0, return_counts=True)
+    return bool(len(counts)) and bool(np.all(counts == 2))
+
+
+def collider_sample(ob, depsgraph) -> dict:
+    """A collision object now: its evaluated mesh in its own (scaled) frame, its pose in the
+    world (rotation, translation: world = rotation @ vertices + translation) and its settings.
+    A mirrored or sheared transform is baked into the vertices (pose: identity)."""
+    ob_eval = ob.evaluated_get(depsgraph)
+    me = ob_eval.to_mesh()
+    try:
+        me.calc_loop_triangles()
+        co = np.empty(3 * len(me.vertices), dtype=np.float64)
+        me.vertices.foreach_get("co", co)
+        tris = np.empty(3 * len(me.loop_triangles), dtype=np.int32)
+        me.loop_triangles.foreach_get("vertices", tris)
+    finally:
+        ob_eval.to_mesh_clear()
+    co, tris = co.reshape(-1, 3), tris.reshape(-1, 3)
+    m = np.array(ob.matrix_world, dtype=np.float64)
+    A, t = m[:3, :3], m[:3, 3]
+    scale = np.linalg.norm(A, axis=0)
+    R = A / np.where(scale > 0, scale, 1.0)
+    if np.all(scale > 0) and np.abs(R.T @ R - np.eye(3)).max() < 1e-6 and np.linalg.det(R) > 0:
+        local = co * scale
+    else:
+        local, R = co @ A.T, np.eye(3)
+    c = ob.collision
+    return dict(name=ob.name, vertices=local, faces=tris, rotation=R, translation=t,
+                friction=CLOTH_FRICTION_SCALE * float(c.cloth_friction), thickness=float(c.thickness_outer))
+
+
+def collision_warnings(view_layer, sheet_name: str, shell: bool) -> list:
+    """What the bake ignores of Blender's Collision settings, in the panel's words."""
+    out = []
+    for ob in view_layer.objects:
+        mod = _collision_modifier(ob)
+        if mod is None:
+            continue
+        if ob.name == sheet_name:
+            out.append(f"'{ob.name}' has Collision physics itself: ThinBurn ignores it on the sheet")
+            continue
+        if ob.type != "MESH":
+            out.append(f"'{ob.name}' has Collision physics but is not a mesh: only meshes collide with ThinBurn sheets")
+            continue
+        if not shell:
+            out.append(f"'{ob.name}' (Collision) does not hold the sheet: collisions need Crumple on "
+                       "(Physics > ThinBurn)")
+            continue
+        c = ob.collision
+        ignored = [label for label, on in (("Damping", c.damping > 0), ("Single Sided", c.use_culling),
+                                           ("Override Normals", c.use_normal)) if on]
+        if ignored:
+            out.append(f"Collision '{ob.name}': {', '.join(ignored)} not used by ThinBurn: it uses "
+                       "Friction and Outer thickness only, and collides with both sides")
+    return out

@@ -141,6 +141,8 @@ class BakeJob:
         self.fps = self.scene.render.fps / self.scene.render.fps_base
         self.dt = 1.0 / self.fps
         self.winds = inputs.wind_objects(context.view_layer)
+        self.colliders = inputs.collision_objects(context.view_layer, obj.name)
+        self.collider_samples = {}
         self.frame_restore = self.scene.frame_current
         # The sheet's rest state (its transform, the floor, who is near) is read at the first frame.
         self.scene.frame_set(self.frames[0])
@@ -203,6 +205,8 @@ class BakeJob:
         self.warnings = inputs.wind_warnings(context.view_layer)
         if self.grouped:
             self.warnings += inputs.group_setting_warnings(obj, objs[1:])
+        self.warnings += inputs.collision_warnings(context.view_layer, obj.name, self.shell)
+        self._drop_open_colliders()
         if self.flames and not settings.heat_ignites:
             self.warnings.append(
                 f"{', '.join(repr(n) for n in self.flames)} {'is a Flame' if len(self.flames) == 1 else 'are Flames'}: "
@@ -354,10 +358,13 @@ class BakeJob:
                 sample = inputs.sample_frame(self.scene, frame, self.obj_name, self.igniters,
                                              self.winds, self.spacing)
                 self.samples[self.next_sample] = sample
+                if self.shell and self.colliders:
+                    self.collider_samples[self.next_sample] = self._sample_colliders()
                 self._follow(self.next_sample, sample)
                 self.next_sample += 1
             self.worker.tasks.put(self._task(self.next_task))
             self.samples.pop(self.next_task - 1, None)
+            self.collider_samples.pop(self.next_task - 1, None)
             self.next_task += 1
             if _time.perf_counter() > deadline:
                 break
@@ -404,7 +411,48 @@ class BakeJob:
         return FrameTask(index=k, ignitions=ignitions, fields=here.fields,
                          wind_scale=here.wind_scale, frame=here.frame, to_world=F,
                          dynamics=changed, step=not last, surfaces=surfaces, painted=painted,
-                         flames=flames)
+                         flames=flames, colliders=self._collider_task(k))
+
+    # --- collision objects -------------------------------------------------------------------
+    def _drop_open_colliders(self) -> None:
+        """An open mesh has no inside to push the sheet out of: warn and leave it out."""
+        if not (self.shell and self.colliders):
+            self.colliders = []
+            return
+        depsgraph = bpy.context.evaluated_depsgraph_get()
+        kept = []
+        for name in self.colliders:
+            tris = inputs.collider_sample(bpy.data.objects[name], depsgraph)["faces"]
+            if inputs.closed_mesh(tris):
+                kept.append(name)
+            else:
+                self.warnings.append(f"Collision '{name}' is not a closed mesh (it has holes or open "
+                                     "edges), so ThinBurn sheets pass through it: close it, or add a "
+                                     "Solidify modifier above its Collision")
+        self.colliders = kept
+
+    def _sample_colliders(self) -> list:
+        depsgraph = bpy.context.evaluated_depsgraph_get()
+        objects = bpy.data.objects
+        for name in self.colliders:
+            if objects.get(name) is None:
+                raise BakeError(f"'{name}' was deleted or renamed during the bake")
+        return [inputs.collider_sample(objects[name], depsgraph) for name in self.colliders]
+
+    def _collider_task(self, k: int):
+        """The colliders at frame k in the bake frame (the core's): each pose taken from the
+        world into it; the worker rebuilds a collider's field only when its mesh changed."""
+        here = self.collider_samples.get(k)
+        if not here:
+            return None
+        inv = np.linalg.inv(self.frame_maps[k])
+        out = []
+        for c in here:
+            c = dict(c)
+            c["rotation"] = inv[:3, :3] @ c["rotation"]
+            c["translation"] = inv[:3, :3] @ c["translation"] + inv[:3, 3]
+            out.append(c)
+        return out
 
     @staticmethod
     def _in_bake_frame(igniter, F):

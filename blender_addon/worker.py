@@ -33,6 +33,7 @@ class FrameTask:
     surfaces: list = field(default_factory=list)  # mesh igniters: (points (k, 3), radius m, time s)
     painted: object = None          # (n,) Ignite map values to light at this frame's start
     flames: object = None           # (points (k, 3), widths (k,)) of the lit Flames, or None
+    colliders: object = None        # collision objects in the bake frame (job._collider_task), or None
 
 
 def path_ignitions(start, end, t0: float, dt: float, spacing: float) -> list:
@@ -94,6 +95,8 @@ class CoreWorker(threading.Thread):
         self.tasks: queue.Queue = queue.Queue()
         self.results: queue.Queue = queue.Queue()
         self._cancel = threading.Event()
+        self._colliders = None  # thinburn.colliders.Colliders built from the first task that has some
+        self._collider_meshes = []  # per collider: the (vertices, faces) its field was built from
 
     def cancel(self) -> None:
         self._cancel.set()
@@ -136,11 +139,50 @@ class CoreWorker(threading.Thread):
         if task.flames is not None:
             sim.set_fire_sources(*task.flames)
         if task.step:
+            if task.colliders is not None:
+                self._collide(sim, task.colliders)
             self._blow(sim, task, positions)
             if task.dynamics:
                 sim.set_dynamics(**task.dynamics)
             sim.step(self._dt)
         return ("frame", task.index, positions, lit, particles)
+
+    def _collide(self, sim, colliders: list) -> None:
+        """Blender's Collision objects as the core's mesh colliders. A field is built only when
+        a mesh is new or changed shape (0.1-0.3 s each); a collider that only moved gets a new
+        pose, and one that did not move is left alone (a pose change wakes the whole sheet)."""
+        from thinburn.colliders import Colliders
+
+        meshes = [(c["vertices"], c["faces"]) for c in colliders]
+        same = (self._colliders is not None and len(meshes) == len(self._collider_meshes) and
+                all(v.shape == v0.shape and np.array_equal(v, v0) and np.array_equal(f, f0)
+                    for (v, f), (v0, f0) in zip(meshes, self._collider_meshes)))
+        if not same:
+            self._colliders = Colliders(meshes=[dict(vertices=c["vertices"], faces=c["faces"],
+                                                     friction=c["friction"], thickness=c["thickness"])
+                                                for c in colliders])
+            self._collider_meshes = meshes
+            self._poses = [None] * len(colliders)
+            self._frictions = [c["friction"] for c in colliders]
+            for i, c in enumerate(colliders):
+                self._set_pose(i, c)
+            sim.set_colliders(self._colliders)
+            return
+        for i, c in enumerate(colliders):
+            self._set_pose(i, c)
+            if c["friction"] != self._frictions[i]:
+                self._colliders.set_friction(i, c["friction"])
+                self._frictions[i] = c["friction"]
+
+    def _set_pose(self, i: int, c: dict) -> None:
+        pose = (np.asarray(c["rotation"], dtype=np.float64), np.asarray(c["translation"], dtype=np.float64))
+        old = self._poses[i]
+        if old is not None and np.array_equal(old[0], pose[0]) and np.array_equal(old[1], pose[1]):
+            return
+        # A pose within rounding of a rotation (a float32 matrix_world) is made exactly one.
+        u, _, vt = np.linalg.svd(pose[0])
+        self._colliders.set_transform(i, pose[1], u @ vt)
+        self._poses[i] = pose
 
     def _blow(self, sim, task: FrameTask, positions: np.ndarray) -> None:
         """The force fields at the lattice's control vertices (each its own wind on the motion)

@@ -614,13 +614,26 @@ Eigen::Map<Eigen::Matrix3d> mat3(double* base, int slot) {
 }  // namespace
 
 Eigen::Vector3d LatticeDynamics::supported(int v, Eigen::Vector3d f) const {
-  if (!p_.has_floor || lat_.positions()(v, 2) > floor_at(v) || f.z() >= 0.0) return f;
-  const double normal = -f.z();
-  f.z() = 0.0;
-  const double t = std::hypot(f.x(), f.y());
-  const double keep = t > p_.friction * normal ? (t - p_.friction * normal) / t : 0.0;
-  f.x() *= keep;
-  f.y() *= keep;
+  if (p_.has_floor && lat_.positions()(v, 2) <= floor_at(v) && f.z() < 0.0) {
+    const double normal = -f.z();
+    f.z() = 0.0;
+    const double t = std::hypot(f.x(), f.y());
+    const double keep = t > p_.friction * normal ? (t - p_.friction * normal) / t : 0.0;
+    f.x() *= keep;
+    f.y() *= keep;
+  }
+  // A collider holds a vertex resting on it the same way: the inward push is taken, and static
+  // friction takes up to friction times that of the tangential force.
+  ColliderHit hit;
+  if (collider_contact(lat_.positions().row(v).transpose(), hit)) {
+    const double fn = f.dot(hit.normal);
+    if (fn < 0.0) {
+      const Eigen::Vector3d ft = f - fn * hit.normal;
+      const double t = ft.norm();
+      const double keep = t > hit.friction * -fn ? (t - hit.friction * -fn) / t : 0.0;
+      f = keep * ft;
+    }
+  }
   return f;
 }
 
@@ -707,6 +720,7 @@ int LatticeDynamics::integrate(double dt, int substeps, StepStats& st) {
       else
         explicit_substep(h, p_.integrator == Integrator::Explicit);
       apply_floor(h);
+      apply_colliders(h);
     }
     st.max_strain = max_active_strain();
     if (!implicit || p_.substeps > 0 || substeps == 0 ||
@@ -737,7 +751,7 @@ int LatticeDynamics::choose_substeps(double dt, double omega, double c_eff) cons
           " substeps (largest frequency " + std::to_string(omega) + " rad/s, stable substep " +
           std::to_string(h) + " s), more than max_substeps = " + std::to_string(p_.max_substeps) +
           "; use the Implicit integrator or raise max_substeps");
-    return std::max(1, static_cast<int>(need));
+    return std::max({1, static_cast<int>(need), contact_substeps(dt)});
   }
   // Implicit: one Newton step per substep is accurate while no spring changes length by more
   // than max_stretch of its rest length in a substep.
@@ -751,7 +765,7 @@ int LatticeDynamics::choose_substeps(double dt, double omega, double c_eff) cons
       const double rel = (vel_.row(v) + drift_.row(v) - vel_.row(o) - drift_.row(o)).norm();
       ratio = std::max(ratio, rel * dt / (p_.max_stretch * len));
     }
-  const double need = std::ceil(ratio);
+  const double need = std::max(std::ceil(ratio), double(contact_substeps(dt)));
   return static_cast<int>(std::clamp(need, 1.0, double(p_.max_substeps)));
 }
 
@@ -1239,6 +1253,107 @@ void LatticeDynamics::apply_floor(double h) {
   }
 }
 
+void LatticeDynamics::set_colliders(std::shared_ptr<const Colliders> colliders, double margin) {
+  require(std::isfinite(margin) && margin >= 0.0,
+          "collider margin must be finite and >= 0 m, got " + std::to_string(margin));
+  colliders_ = std::move(colliders);
+  collider_margin_ = margin;
+  collider_version_ = colliders_ ? colliders_->version() : 0;
+  std::fill(awake_.begin(), awake_.end(), 1);
+}
+
+bool LatticeDynamics::collider_contact(const Eigen::Vector3d& x, ColliderHit& hit) const {
+  // A vertex the last projection left at the margin is in contact: the slack covers the
+  // rounding of that projection (a mesh's trilinear field is not exactly linear along n).
+  constexpr double kSlack = 1e-7;  // m
+  if (!colliders_) return false;
+  hit = colliders_->query(x);
+  return hit.distance < collider_margin_ + kSlack;
+}
+
+void LatticeDynamics::apply_colliders(double h) {
+  // Projection after the substep, as apply_floor does for the floor (docs/dynamics.md §3.2).
+  // The substep's solve did not know the collider, so the vertex's couple partner moved with it
+  // into the collider; the partner takes the same correction (the couple moves as one), or the
+  // top layer would fall through a resting bottom layer by g h^2 every substep.
+  if (!colliders_) return;
+  constexpr int kProjections = 3;  // a mesh's field: a second try lands within ~1e-9 m
+  RowMatX3& x = lat_.positions();
+  const int na = static_cast<int>(active_.size());
+  // Per active vertex, dx and dv of its contact (NaN in dx(0): none), computed in parallel.
+  RowMatX3& dx = x_contact_;
+  RowMatX3& dv = v_contact_;
+  dx.resize(na, 3);
+  dv.resize(na, 3);
+  parallel_for(0, na, kRowCost, [&](long a) {
+    const int v = active_[a];
+    dx(a, 0) = std::numeric_limits<double>::quiet_NaN();
+    Eigen::Vector3d p = x.row(v).transpose();
+    ColliderHit hit = colliders_->query(p);
+    if (!(hit.distance < collider_margin_)) return;
+    for (int k = 0; k < kProjections && hit.distance < collider_margin_; ++k) {
+      p += (collider_margin_ - hit.distance) * hit.normal;
+      hit = colliders_->query(p);
+    }
+    const Eigen::Vector3d n = hit.normal;
+    const Eigen::Vector3d u = vel_.row(v).transpose();
+    const double un = u.dot(n);
+    const double removed = std::max(0.0, -un);
+    const Eigen::Vector3d ut = u - un * n;
+    const double t = ut.norm();
+    const double keep = t > hit.friction * removed ? (t - hit.friction * removed) / t : 0.0;
+    // Friction acts within the substep: the vertex moves with the tangential speed it keeps,
+    // so one held by static friction does not creep down a slope by h^2 g sin(angle) a substep.
+    p -= h * (1.0 - keep) * ut;
+    dx.row(a) = p.transpose() - x.row(v);
+    dv.row(a) = (std::max(un, 0.0) * n + keep * ut - u).transpose();
+  });
+  // Both vertices of a couple in contact: the deeper one's correction moves both (each its own
+  // would squash the couple onto the margin).
+  for (int a = 0; a < na; ++a) {
+    if (std::isnan(dx(a, 0))) continue;
+    const int v = active_[a];
+    const int b = slot_[v ^ 1];  // the couple's other vertex, -1 when it does not move
+    if (b >= 0 && !std::isnan(dx(b, 0))) {
+      const double mine = dx.row(a).squaredNorm(), theirs = dx.row(b).squaredNorm();
+      if (mine < theirs || (mine == theirs && (v & 1))) continue;
+    }
+    x.row(v) += dx.row(a);
+    vel_.row(v) += dv.row(a);
+    if (b >= 0) {
+      x.row(v ^ 1) += dx.row(a);
+      vel_.row(v ^ 1) += dv.row(a);
+    }
+  }
+}
+
+int LatticeDynamics::contact_substeps(double dt) const {
+  // A vertex that may reach a collider this step stops there while its spring neighbours, in the
+  // solve, still move: per substep it may fall (s + |g| h) h into it, s its inward speed. That
+  // must stay within kContactTravel of its shortest spring in the sheet's plane, so:
+  // |g| h^2 + s h <= L. (max_stretch, 1 by default in a Simulation, lets contacts fall through
+  // a couple's thickness: measured, a sheet on a 20 degree slope then slid at half of g sin.)
+  constexpr double kContactTravel = 0.1;
+  if (!colliders_) return 1;
+  const RowMatX3& x = lat_.positions();
+  const double g = p_.gravity.norm();
+  double need = 1.0;
+  for (int v : active_) {
+    const double speed = vel_.row(v).norm();
+    const ColliderHit hit = colliders_->query(x.row(v).transpose());
+    if (!(hit.distance < collider_margin_ + (speed + g * dt) * dt)) continue;
+    double L = std::numeric_limits<double>::infinity();
+    for (int q = inc_start_[v]; q < inc_start_[v + 1]; ++q)
+      if (kind_[inc_spring_[q]] != 3 && rest_len_[inc_spring_[q]] > 0.0) L = std::min(L, rest_len_[inc_spring_[q]]);
+    if (!std::isfinite(L)) continue;
+    L *= kContactTravel;
+    const double s = std::max(0.0, -vel_.row(v).dot(hit.normal));
+    const double hmax = g > 0.0 ? (-s + std::sqrt(s * s + 4.0 * g * L)) / (2.0 * g) : (s > 0.0 ? L / s : dt);
+    need = std::max(need, std::ceil(dt / hmax));
+  }
+  return static_cast<int>(std::min(need, double(p_.max_substeps)));
+}
+
 int LatticeDynamics::wake_stressed_sleepers(double dt) {
   list_.clear();
   for (int v : active_)
@@ -1330,6 +1445,10 @@ StepStats LatticeDynamics::step(double dt, const Eigen::VectorXd& D, const Eigen
     forced_[v] = disp_.row(v).squaredNorm() > 0.0 || (p_.bimetal && delta_(v / 2) != 0.0) ||
                  std::abs(p_.buoyancy * (heat_(v) - heat_prev_(v))) * dt >= p_.sleep_speed;
   if (bimetal && bimetal_all_) std::fill(awake_.begin(), awake_.end(), 1);
+  if (colliders_ && colliders_->version() != collider_version_) {  // a collider moved
+    std::fill(awake_.begin(), awake_.end(), 1);
+    collider_version_ = colliders_->version();
+  }
   if (!p_.sleeping)
     std::fill(awake_.begin(), awake_.end(), 1);
   else

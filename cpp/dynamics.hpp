@@ -11,6 +11,7 @@
 #include <memory>
 #include <vector>
 
+#include "colliders.hpp"
 #include "lattice.hpp"
 
 namespace thinburn {
@@ -130,6 +131,11 @@ class LatticeDynamics {
   /// 0 for all). A shell's couples need not reach its lowest points: a lantern's lowest couples
   /// sit above its rim, so they rest that much above the floor.
   void set_floor_offsets(const Eigen::VectorXd& offsets);
+  /// @brief Collision objects (docs/dynamics.md §3.2), kept by pointer (null: none): after every
+  /// substep a free control vertex closer than margin (m, >= 0) to one is pushed out to margin
+  /// along its normal, loses its inward normal speed and, by the collider's friction times that
+  /// speed, its tangential speed. Everything wakes now and whenever colliders->version() changes.
+  void set_colliders(std::shared_ptr<const Colliders> colliders, double margin);
   /// @brief Wind velocity, m/s.
   void set_wind(const Eigen::Vector3d& w);
   /// @brief Wind velocity per control vertex ((2 M^2) x 3, m/s), used instead of set_wind's
@@ -216,6 +222,9 @@ class LatticeDynamics {
   void apply_A(double h, const double* in, double* out);
   void precondition(const double* in, double* out);
   void apply_floor(double h);
+  void apply_colliders(double h);
+  int contact_substeps(double dt) const;
+  bool collider_contact(const Eigen::Vector3d& x, ColliderHit& hit) const;
   void apply_plasticity();
   void build_bimetal();
   void apply_bimetal(const Eigen::VectorXd& D, bool all);
@@ -231,6 +240,10 @@ class LatticeDynamics {
   FfdLattice& lat_;
   DynamicsParams p_;
   Eigen::VectorXd floor_offset_;  // per vertex, empty: none
+  std::shared_ptr<const Colliders> colliders_;  // null: none
+  double collider_margin_ = 0.0;
+  std::uint64_t collider_version_ = 0;  // colliders_->version() when the sheet last woke for it
+  RowMatX3 x_contact_, v_contact_;      // apply_colliders' per-active-vertex corrections
   LatticeTopology topo_;
   int C_, n_;  // couples, control vertices
   // Springs: endpoints, kind, rest length; per-vertex incidence (CSR, fixed order).

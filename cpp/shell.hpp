@@ -87,6 +87,10 @@ class Shell {
   void set_dynamics_params(const DynamicsParams& p);
   /// @brief Per-control-vertex wind for the motion (LatticeDynamics::set_wind_field).
   void set_wind_field(const RowMatX3& w) { dynamics_->set_wind_field(w); }
+  /// @brief Collision objects for the motion (LatticeDynamics::set_colliders).
+  void set_colliders(std::shared_ptr<const Colliders> c, double margin) {
+    dynamics_->set_colliders(std::move(c), margin);
+  }
 
   const FfdLattice& lattice() const { return *lattice_; }
   const LatticeDynamics& dynamics() const { return *dynamics_; }

@@ -129,6 +129,12 @@ class Simulation {
     if (!shell_) throw std::invalid_argument("set_wind_field: this simulation has no shell");
     shell_->set_wind_field(w);
   }
+  /// @brief Collision objects for the sheet's motion (LatticeDynamics::set_colliders); null:
+  /// none. Needs shell.
+  void set_colliders(std::shared_ptr<const Colliders> c, double margin) {
+    if (!shell_) throw std::invalid_argument("set_colliders: this simulation has no shell");
+    shell_->set_colliders(std::move(c), margin);
+  }
   const Eigen::Vector3d& wind() const { return wind_; }
 
   std::vector<std::uint8_t> cell_states() const { return state_; }

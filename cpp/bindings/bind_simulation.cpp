@@ -145,6 +145,9 @@ void define_simulation(py::module_& m) {
                              "A copy of the parameters in force now.")
       .def_property("wind", &S::wind, &S::set_wind)
       .def("set_wind_field", &S::set_wind_field, py::arg("wind"))
+      .def("set_colliders",
+           [](S& s, std::shared_ptr<Colliders> c, double margin) { s.set_colliders(std::move(c), margin); },
+           py::arg("colliders").none(true), py::arg("margin"))
       .def_property_readonly("geometry", [](const S& s) { return geometry_name(s.geometry()); })
       .def_property_readonly("cells", [](const S& s) { return s.geometry() == Geometry::Plane ? s.sheet().cells() : s.params().cells; })
       .def_property_readonly("num_cells", &S::num_cells)

@@ -16,6 +16,7 @@ void define_dynamics(pybind11::module_& m);
 void define_surface_front(pybind11::module_& m);
 void define_bending(pybind11::module_& m);
 void define_control_surface(pybind11::module_& m);
+void define_colliders(pybind11::module_& m);
 
 // Parameter structs from keyword dictionaries (unknown names raise TypeError, bad values
 // ValueError naming the field), shared by the parts' own bindings and the Simulation's.

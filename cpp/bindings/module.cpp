@@ -13,4 +13,5 @@ PYBIND11_MODULE(_core, m) {
   thinburn::bind::define_surface_front(m);
   thinburn::bind::define_bending(m);
   thinburn::bind::define_control_surface(m);
+  thinburn::bind::define_colliders(m);
 }

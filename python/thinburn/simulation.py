@@ -8,6 +8,7 @@ import numpy as np
 from . import _core
 from . import _validate as V
 from ._threads import resolve_threads
+from .colliders import Colliders
 from .materials import IGNITION_TEMPERATURE, Material, resolve_material
 
 FRONT_METHODS = ("cellular", "cellular16", "fmm1", "fmm")
@@ -398,6 +399,29 @@ class Simulation:
         if fastest > MAX_WIND:
             raise ValueError(f"wind field: |wind| = {fastest:.3g} m/s exceeds {MAX_WIND:g} m/s")
         self._sim.set_wind_field(np.ascontiguousarray(w))
+
+    def set_colliders(self, colliders=None, *, spheres=(), boxes=(), meshes=(), margin=None):
+        """Collision objects the sheet rests on or drapes over (docs/dynamics.md §3.2): a
+        ``thinburn.colliders.Colliders``, or ``spheres``/``boxes``/``meshes`` lists of dicts
+        that build one (see ``Colliders``); None and no lists: none. After every substep a
+        lattice control vertex closer than ``margin`` (m; None: half ``lattice_thickness``, so
+        that the fine mesh between couples keeps clear of a curved collider) is pushed out
+        along the collider's normal, loses its inward speed, and Coulomb friction (each
+        collider's ``friction`` times that speed) slows it along the surface. Returns the
+        Colliders in force: move one with ``set_transform`` between steps (the sheet wakes).
+        Mutating it from another thread during a step is not supported."""
+        self._require_shell("set_colliders")
+        if colliders is not None and (spheres or boxes or meshes):
+            raise TypeError("set_colliders: pass either colliders or spheres/boxes/meshes, not both")
+        if colliders is None and (spheres or boxes or meshes):
+            colliders = Colliders(spheres=spheres, boxes=boxes, meshes=meshes)
+        if colliders is not None and not isinstance(colliders, Colliders):
+            raise TypeError(f"colliders must be a thinburn.colliders.Colliders or None, "
+                            f"got {type(colliders).__name__}")
+        m = 0.5 * self.lattice_thickness if margin is None else V.real(margin, "margin", low=0.0)
+        self._sim.set_colliders(None if colliders is None else colliders._core, m)
+        self._colliders = colliders
+        return colliders
 
     @property
     def threads(self) -> int:

@@ -1,0 +1,175 @@
+"""Collision objects: distances against closed forms, and a sheet resting, draping and sliding."""
+import numpy as np
+import pytest
+
+import thinburn
+from thinburn.colliders import Colliders
+from thinburn.scenes import rect_sheet
+
+QUIET = dict(speed_noise=0.0, duration_noise=0.0)
+
+
+def icosphere(radius, subdivisions):
+    """A closed icosphere: (vertices, faces), outward-wound."""
+    t = (1 + 5 ** 0.5) / 2
+    v = [(-1, t, 0), (1, t, 0), (-1, -t, 0), (1, -t, 0), (0, -1, t), (0, 1, t), (0, -1, -t), (0, 1, -t),
+         (t, 0, -1), (t, 0, 1), (-t, 0, -1), (-t, 0, 1)]
+    f = [(0, 11, 5), (0, 5, 1), (0, 1, 7), (0, 7, 10), (0, 10, 11), (1, 5, 9), (5, 11, 4), (11, 10, 2),
+         (10, 7, 6), (7, 1, 8), (3, 9, 4), (3, 4, 2), (3, 2, 6), (3, 6, 8), (3, 8, 9), (4, 9, 5),
+         (2, 4, 11), (6, 2, 10), (8, 6, 7), (9, 8, 1)]
+    v = [np.array(p, float) / np.linalg.norm(p) for p in v]
+    for _ in range(subdivisions):
+        mid, nf = {}, []
+
+        def midpoint(a, b):
+            key = (min(a, b), max(a, b))
+            if key not in mid:
+                m = v[a] + v[b]
+                v.append(m / np.linalg.norm(m))
+                mid[key] = len(v) - 1
+            return mid[key]
+
+        for a, b, c in f:
+            ab, bc, ca = midpoint(a, b), midpoint(b, c), midpoint(c, a)
+            nf += [(a, ab, ca), (b, bc, ab), (c, ca, bc), (ab, bc, ca)]
+        f = nf
+    return radius * np.array(v), np.array(f)
+
+
+def test_sphere_and_box_distances_are_the_closed_forms():
+    c = Colliders(spheres=[dict(centre=(1, 0, 0), radius=0.5)])
+    d, n, i = c.query([(3, 0, 0), (1, 0, 0.2)])
+    np.testing.assert_allclose(d, [1.5, -0.3], atol=1e-12)
+    np.testing.assert_allclose(n, [(1, 0, 0), (0, 0, 1)], atol=1e-12)
+    a = np.radians(30)
+    R = np.array([[np.cos(a), -np.sin(a), 0], [np.sin(a), np.cos(a), 0], [0, 0, 1]])
+    b = Colliders(boxes=[dict(centre=(0, 0, 0), half_extents=(1, 2, 3), rotation=R, thickness=0.1)])
+    # Local (2, 0, 0) is 1 past the x face; local (2, 3, 0) 1 past x and y: sqrt(2). Minus thickness.
+    d, n, _ = b.query([R @ (2, 0, 0), R @ (2, 3, 0), R @ (0.5, 0, 0)])
+    np.testing.assert_allclose(d, [0.9, 2 ** 0.5 - 0.1, -0.6], atol=1e-12)
+    np.testing.assert_allclose(n[0], R @ (1, 0, 0), atol=1e-12)
+    np.testing.assert_allclose(n[1], R @ (2 ** -0.5, 2 ** -0.5, 0), atol=1e-12)
+    # The nearest of several wins; moving one moves its field.
+    both = Colliders(spheres=[dict(centre=(0, 0, 0), radius=1), dict(centre=(5, 0, 0), radius=1)])
+    assert both.query([(4.5, 0, 0)])[2][0] == 1
+    both.set_transform(1, (10, 0, 0))
+    assert both.query([(4.5, 0, 0)])[2][0] == 0
+
+
+def test_closed_mesh_agrees_with_the_analytic_sphere_within_the_grid():
+    R = 0.2
+    v, f = icosphere(R, 3)  # 1280 faces: the facets lie within R (1 - cos(3.0 deg)) = 0.28 mm of the sphere
+    mesh = Colliders(meshes=[dict(vertices=v, faces=f, resolution=48)])
+    dx = mesh.grid_spacing(0)
+    rng = np.random.default_rng(0)
+    dirs = rng.normal(size=(400, 3))
+    dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
+    radii = rng.uniform(0.5 * R, 1.5 * R, size=400)
+    p = dirs * radii[:, None] + (0.01, -0.02, 0.03)
+    mesh.set_transform(0, (0.01, -0.02, 0.03))  # the field moves with its pose
+    d, n, _ = mesh.query(p)
+    exact = radii - R
+    near = np.abs(exact) < 2 * dx  # where contacts happen; farther out the grid's padding ends
+    err = np.abs(d - exact)[near]
+    angle = np.degrees(np.arccos(np.clip(np.sum(n * dirs, axis=1), -1, 1)))[near]
+    # Measured (dx 8.3 mm): max |error| 0.89 mm = 0.107 dx, normals within 5.1 deg.
+    assert err.max() < 0.13 * dx
+    assert angle.max() < 6.0
+    assert np.all(np.sign(d[np.abs(exact) > dx]) == np.sign(exact[np.abs(exact) > dx]))
+
+
+def test_bad_inputs_name_the_argument():
+    v, f = icosphere(1.0, 1)
+    with pytest.raises(ValueError, match=r"meshes\[0\].*not closed"):
+        Colliders(meshes=[dict(vertices=v, faces=f[:-1])])
+    bad = v.copy()
+    bad[3, 1] = np.nan
+    with pytest.raises(ValueError, match=r"meshes\[0\]\.vertices.*NaN"):
+        Colliders(meshes=[dict(vertices=bad, faces=f)])
+    with pytest.raises(ValueError, match=r"spheres\[1\]\.radius"):
+        Colliders(spheres=[dict(centre=(0, 0, 0), radius=1), dict(centre=(0, 0, 0), radius=-1)])
+    with pytest.raises(ValueError, match=r"boxes\[0\].*rotation"):
+        Colliders(boxes=[dict(centre=(0, 0, 0), half_extents=(1, 1, 1), rotation=2 * np.eye(3))])
+    with pytest.raises(ValueError, match=r"spheres\[0\].*friction"):
+        Colliders(spheres=[dict(centre=(0, 0, 0), radius=1, friction=-0.1)])
+    sim = thinburn.Simulation(*rect_sheet(0.1, 0.1, nx=5, ny=5), cells=16, lattice=4)
+    with pytest.raises(TypeError, match="colliders"):
+        sim.set_colliders("table")
+    with pytest.raises(ValueError, match="margin"):
+        sim.set_colliders(spheres=[dict(centre=(0, 0, -1), radius=0.5)], margin=-1.0)
+
+
+def run_lattice(sim, seconds):
+    for _ in range(int(round(seconds * 24))):
+        sim.step(1 / 24)
+    return sim.lattice_positions().reshape(-1, 3)
+
+
+def test_cloth_dropped_on_a_sphere_rests_on_it():
+    R = 0.25
+    c = np.array([0.15, 0.15, -R - 0.02])
+    sim = thinburn.Simulation(*rect_sheet(0.3, 0.3, nx=31, ny=31), cells=32, lattice=12, material="cloth", **QUIET)
+    sim.set_colliders(spheres=[dict(centre=c, radius=R, friction=0.5)])
+    margin = 0.5 * sim.lattice_thickness
+    before = run_lattice(sim, 4.0)
+    after = run_lattice(sim, 1.0)
+    d = np.linalg.norm(after - c, axis=1) - R
+    assert d.min() > margin - 1e-9  # no control vertex inside the margin
+    mesh = sim.vertex_positions()
+    apex = mesh[np.argmin(np.linalg.norm(mesh[:, :2] - c[:2], axis=1)), 2] - (c[2] + R)
+    # The mid-surface above the top: margin (3.4 mm) + about half a thickness; measured 6.07 mm.
+    assert abs(apex - 6.07e-3) < 0.3e-3
+    assert (np.linalg.norm(mesh - c, axis=1) - R).min() > 0.0  # measured 6.1 mm clear
+    assert mesh[:, 2].min() < c[2] + R - 0.006  # it drapes: the hem 9.0 mm below the top (measured)
+    assert np.abs(after - before).max() < 1e-6  # at rest: measured 3e-11 m in the 5th second
+
+
+def test_cloth_draped_over_a_box_edge_hangs_down_the_side():
+    # 0.35 m of the strip on the box's top (z = -0.01, edge at x = 0.35), 0.25 m over the edge.
+    sim = thinburn.Simulation(*rect_sheet(0.6, 0.1, nx=61, ny=11), cells=32, lattice=16, material="cloth", **QUIET)
+    sim.set_colliders(boxes=[dict(centre=(-0.15, 0.05, -0.51), half_extents=(0.5, 0.5, 0.5), friction=1.0)])
+    margin = 0.5 * sim.lattice_thickness
+    L = run_lattice(sim, 2.0)
+    d, _, _ = Colliders(boxes=[dict(centre=(-0.15, 0.05, -0.51), half_extents=(0.5, 0.5, 0.5))]).query(L)
+    assert d.min() > margin - 1e-9
+    mesh = sim.vertex_positions()
+    assert mesh[:, 2].min() < -0.01 - 0.19  # the hem hangs 0.2035 m below the top (measured)
+    assert mesh[:, 0].min() < 0.01  # the part on top stays: it slid 3.2 mm (measured)
+
+
+@pytest.mark.parametrize("degrees, slides", [(20, False), (35, True)])
+def test_coulomb_friction_on_an_inclined_box(degrees, slides):
+    mu, a = 0.5, np.radians(degrees)
+    Ry = np.array([[np.cos(a), 0, np.sin(a)], [0, 1, 0], [-np.sin(a), 0, np.cos(a)]])
+    n = Ry @ (0, 0, 1)
+    v, f = rect_sheet(0.1, 0.1, nx=11, ny=11)
+    thickness = 0.005  # this sheet's lattice_thickness (asserted below)
+    v = (v - (0.05, 0.05, 0)) @ Ry.T + n * (thickness + 1e-4)  # bottom layer 0.1 mm above the margin
+    # wind_drag 0: the air's drag on each substep's fall into the face would take from the normal
+    # force, hence the friction (docs/dynamics.md §3.2).
+    sim = thinburn.Simulation(v, f, cells=16, lattice=6, material="paper", wind_drag=0.0, **QUIET)
+    assert sim.lattice_thickness == pytest.approx(thickness)
+    sim.set_colliders(boxes=[dict(centre=-0.5 * n, half_extents=(5, 5, 0.5), rotation=Ry, friction=mu)])
+    x0 = sim.vertex_positions().mean(0)
+    T = 1.5
+    run_lattice(sim, T)
+    slid = (sim.vertex_positions().mean(0) - x0) @ (Ry @ (1, 0, 0))
+    c = sim.params.dynamics["c_damping"]
+    accel = 9.81 * (np.sin(a) - mu * np.cos(a))
+    # x'' = accel - c x' from rest: x = accel / c (T - (1 - exp(-c T)) / c); 0 when tan(angle) < mu.
+    expected = max(0.0, accel / c * (T - (1 - np.exp(-c * T)) / c))
+    if slides:
+        assert slid == pytest.approx(expected, rel=0.01)  # measured 0.9077 vs 0.9063 m
+    else:
+        assert abs(slid) < 1e-4  # measured 0
+
+
+def test_a_moving_collider_wakes_and_lifts_a_resting_sheet():
+    sim = thinburn.Simulation(*rect_sheet(0.2, 0.2, nx=11, ny=11), cells=16, lattice=6, material="cloth", **QUIET)
+    col = sim.set_colliders(boxes=[dict(centre=(0.1, 0.1, -0.52), half_extents=(0.5, 0.5, 0.5))])
+    margin = 0.5 * sim.lattice_thickness
+    run_lattice(sim, 0.5)
+    assert sim.step_stats()["awake"] == 0  # asleep on the box
+    col.set_transform(0, (0.1, 0.1, -0.51))  # 1 cm up
+    L = run_lattice(sim, 1 / 24)
+    assert L[0::2, 2].min() == pytest.approx(-0.01 + margin, abs=1e-9)
