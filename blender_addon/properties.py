@@ -204,7 +204,8 @@ class ThinBurnSettings(bpy.types.PropertyGroup):
         name="Heat Ignites", default=False, options=STATIC,
         description="Parts of this mesh that are not yet burning catch fire when the flames' heat "
                     "(eq. 2, at each fire cell) passes the material's ignition temperature: fire "
-                    "jumps gaps and climbs a stack of sheets made as one mesh. Needs Crumple")
+                    "jumps gaps and climbs a stack of sheets, and separate sheets with Heat Ignites within "
+                    "reach of each other bake together as one simulation. Needs Crumple")
 
     igniter_collection: PointerProperty(
         name="Igniters", type=bpy.types.Collection, options=STATIC,
