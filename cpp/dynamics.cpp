@@ -1169,19 +1169,21 @@ int LatticeDynamics::implicit_substep(double h_step) {
   const double r = bdf2_ratio(h_step);
   const double h = h_step * (1.0 + r) / (1.0 + 2.0 * r);
   const double c_now = (1.0 + r) * (1.0 + r) / (1.0 + 2.0 * r), c_prev = r * r / (1.0 + 2.0 * r);
-  for (int a = 0; a < na; ++a) {
-    const int v = active_[a];
-    const Eigen::RowVector3d xv = x.row(v), vv = vel_.row(v);
-    if (r > 0.0) {
-      x.row(v) = c_now * xv - c_prev * hist_x_.row(v);
-      vel_.row(v) = c_now * vv - c_prev * hist_v_.row(v);
+  if (p_.integrator == Integrator::Bdf2) {  // backward Euler keeps no history
+    for (int a = 0; a < na; ++a) {
+      const int v = active_[a];
+      const Eigen::RowVector3d xv = x.row(v), vv = vel_.row(v);
+      if (r > 0.0) {
+        x.row(v) = c_now * xv - c_prev * hist_x_.row(v);
+        vel_.row(v) = c_now * vv - c_prev * hist_v_.row(v);
+      }
+      hist_x_.row(v) = xv;
+      hist_v_.row(v) = vv;
+      hist_stamp_[v] = substep_count_ + 1;
     }
-    hist_x_.row(v) = xv;
-    hist_v_.row(v) = vv;
-    hist_stamp_[v] = substep_count_ + 1;
+    ++substep_count_;
+    hist_h_ = h_step;
   }
-  ++substep_count_;
-  hist_h_ = h_step;
   implicit_assemble(h);
   Buffers B = buffers(work_, sa_.size(), n_);
   // Warm start from the previous substep's acceleration (a smooth motion changes it little);

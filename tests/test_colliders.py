@@ -4,36 +4,9 @@ import pytest
 
 import thinburn
 from thinburn.colliders import Colliders
-from thinburn.scenes import rect_sheet
+from thinburn.scenes import rect_sheet, sphere
 
 QUIET = dict(speed_noise=0.0, duration_noise=0.0)
-
-
-def icosphere(radius, subdivisions):
-    """A closed icosphere: (vertices, faces), outward-wound."""
-    t = (1 + 5 ** 0.5) / 2
-    v = [(-1, t, 0), (1, t, 0), (-1, -t, 0), (1, -t, 0), (0, -1, t), (0, 1, t), (0, -1, -t), (0, 1, -t),
-         (t, 0, -1), (t, 0, 1), (-t, 0, -1), (-t, 0, 1)]
-    f = [(0, 11, 5), (0, 5, 1), (0, 1, 7), (0, 7, 10), (0, 10, 11), (1, 5, 9), (5, 11, 4), (11, 10, 2),
-         (10, 7, 6), (7, 1, 8), (3, 9, 4), (3, 4, 2), (3, 2, 6), (3, 6, 8), (3, 8, 9), (4, 9, 5),
-         (2, 4, 11), (6, 2, 10), (8, 6, 7), (9, 8, 1)]
-    v = [np.array(p, float) / np.linalg.norm(p) for p in v]
-    for _ in range(subdivisions):
-        mid, nf = {}, []
-
-        def midpoint(a, b):
-            key = (min(a, b), max(a, b))
-            if key not in mid:
-                m = v[a] + v[b]
-                v.append(m / np.linalg.norm(m))
-                mid[key] = len(v) - 1
-            return mid[key]
-
-        for a, b, c in f:
-            ab, bc, ca = midpoint(a, b), midpoint(b, c), midpoint(c, a)
-            nf += [(a, ab, ca), (b, bc, ab), (c, ca, bc), (ab, bc, ca)]
-        f = nf
-    return radius * np.array(v), np.array(f)
 
 
 def test_sphere_and_box_distances_are_the_closed_forms():
@@ -58,7 +31,7 @@ def test_sphere_and_box_distances_are_the_closed_forms():
 
 def test_closed_mesh_agrees_with_the_analytic_sphere_within_the_grid():
     R = 0.2
-    v, f = icosphere(R, 3)  # 1280 faces: the facets lie within R (1 - cos(3.0 deg)) = 0.28 mm of the sphere
+    v, f = sphere(R, level=3)  # 1280 faces: the facets lie within R (1 - cos(3.0 deg)) = 0.28 mm of the sphere
     mesh = Colliders(meshes=[dict(vertices=v, faces=f, resolution=48)])
     dx = mesh.grid_spacing(0)
     rng = np.random.default_rng(0)
@@ -79,7 +52,7 @@ def test_closed_mesh_agrees_with_the_analytic_sphere_within_the_grid():
 
 
 def test_bad_inputs_name_the_argument():
-    v, f = icosphere(1.0, 1)
+    v, f = sphere(1.0, level=1)
     with pytest.raises(ValueError, match=r"meshes\[0\].*not closed"):
         Colliders(meshes=[dict(vertices=v, faces=f[:-1])])
     bad = v.copy()
