@@ -34,7 +34,7 @@ def _burn(seconds, **params):
 
 def test_a4_on_the_table_curls_in_place():
     # Measured (cells=48, M=4, 40 s): centroid of the vertices moved 0.74 mm horizontally
-    # (0.54, 0.51 mm); max z 48 mm. Over the whole burn (120 s, the front out): 0.13 mm. Issue
+    # (0.54, 0.51 mm); max z 48 mm. Issue
     # #12 asks for at most 5 mm; the bound is 1.5 mm. It was 20.2 mm before static friction
     # acted inside the implicit solve (docs/dynamics.md §3), and 300 mm with the paper's chord
     # crumple (bimetal=False).
