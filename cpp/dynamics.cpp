@@ -11,6 +11,7 @@
 
 #include "block_ldlt.hpp"
 #include "crumple.hpp"
+#include "membrane.hpp"
 #include "threads.hpp"
 
 namespace thinburn {
@@ -31,20 +32,12 @@ constexpr double kPi = 3.14159265358979323846;
 // A couple whose D changes by this much across its spacing curls across the front only.
 constexpr double kAnisotropicTurn = 0.25;
 
-void require(bool ok, const std::string& what) {
-  if (!ok) throw std::invalid_argument(what);
+Eigen::Vector3d couple_centre(const RowMatX3& x, int c) {
+  return 0.5 * (x.row(2 * c) + x.row(2 * c + 1)).transpose();
 }
 
-// Spring Jacobian block J (symmetric 3x3) with f_a = -J (x_a - x_b) to first order.
-// clamp: drop the negative part of the geometric term so that J stays positive semidefinite.
-Eigen::Matrix3d spring_block(const Eigen::Vector3d& d, double k, double rest, bool clamp) {
-  const double l = d.norm();
-  if (!(l > 1e-300)) return k * Eigen::Matrix3d::Identity();
-  const Eigen::Vector3d u = d / l;
-  double g = 1.0 - rest / l;
-  if (clamp) g = std::max(g, 0.0);
-  const Eigen::Matrix3d uu = u * u.transpose();
-  return k * (uu + g * (Eigen::Matrix3d::Identity() - uu));
+void require(bool ok, const std::string& what) {
+  if (!ok) throw std::invalid_argument(what);
 }
 
 // Amplification matrix of one substep h on the mode x'' = -w^2 x - c x'.
@@ -98,6 +91,7 @@ void validate(const DynamicsParams& p) {
   nonneg(p.k_thickness, "k_thickness");
   nonneg(p.k_transverse, "k_transverse");
   nonneg(p.stiffness_unit, "stiffness_unit");
+  nonneg(p.flexural_rigidity, "flexural_rigidity");
   nonneg(p.c_damping, "c_damping");
   nonneg(p.wind_drag, "wind_drag");
   nonneg(p.friction, "friction");
@@ -185,6 +179,8 @@ LatticeDynamics::LatticeDynamics(FfdLattice& lattice, const DynamicsParams& p, L
   stick_.assign(n_, 0);
   factor_ = std::make_unique<Factor>();
   build_bimetal();
+  bend_share_ = target_share();
+  if (bend_share_ < 1.0) add_membrane();
 }
 
 void LatticeDynamics::build_bimetal() {
@@ -193,21 +189,11 @@ void LatticeDynamics::build_bimetal() {
   // mid-surface (+ toward the top).
   const RowMatX3& r = lat_.rest();
   const int C = topo_.couples;
-  auto centre = [&](int c) { return Eigen::Vector3d(0.5 * (r.row(2 * c) + r.row(2 * c + 1)).transpose()); };
-  auto offset = [&](int v) {
-    const double half = 0.5 * (r.row(v | 1) - r.row(v & ~1)).norm();
-    return (v & 1) ? half : -half;
-  };
   base_len_ = rest_len_;
-  const int ns = static_cast<int>(sa_.size());
-  mid_sep_.assign(ns, 0.0);
-  off_a_.assign(ns, 0.0);
-  off_b_.assign(ns, 0.0);
-  for (int s = 0; s < ns; ++s) {
-    mid_sep_[s] = (centre(sb_[s] / 2) - centre(sa_[s] / 2)).norm();
-    off_a_[s] = offset(sa_[s]);
-    off_b_[s] = offset(sb_[s]);
-  }
+  mid_sep_.clear();
+  off_a_.clear();
+  off_b_.clear();
+  add_spring_geometry();
   grad_dir_ = RowMatX3::Zero(C, 3);
   grad_share_ = Eigen::VectorXd::Zero(C);
   changed_.assign(C, 0);
@@ -216,9 +202,31 @@ void LatticeDynamics::build_bimetal() {
     double sum = 0.0;
     int k = 0;
     for (int q = topo_.nbr_offset[c]; q < topo_.nbr_offset[c + 1]; ++q, ++k)
-      sum += (centre(topo_.nbr_index[q]) - centre(c)).norm();
+      sum += (couple_centre(r, topo_.nbr_index[q]) - couple_centre(r, c)).norm();
     couple_spacing_(c) = k > 0 ? sum / k : 1.0;
   }
+}
+
+void LatticeDynamics::add_spring_geometry() {
+  // mid_sep_, off_a_, off_b_ of the springs from the first not yet measured to the last.
+  const RowMatX3& r = lat_.rest();
+  auto offset = [&](int v) {
+    const double half = 0.5 * (r.row(v | 1) - r.row(v & ~1)).norm();
+    return (v & 1) ? half : -half;
+  };
+  for (std::size_t s = mid_sep_.size(); s < sa_.size(); ++s) {
+    mid_sep_.push_back((couple_centre(r, sb_[s] / 2) - couple_centre(r, sa_[s] / 2)).norm());
+    off_a_.push_back(offset(sa_[s]));
+    off_b_.push_back(offset(sb_[s]));
+  }
+}
+
+static double chord_ratio(double kappa, double sep) {
+  // Chord over arc of a mid-surface bent to curvature kappa over arc length sep, as
+  // bimetal_ratio's with both offsets 0 (and its half-turn clamp).
+  if (!(sep > 0.0)) return 1.0;
+  const double half = 0.5 * std::clamp(kappa, -kPi / sep, kPi / sep) * sep;
+  return std::abs(half) > 1e-12 ? std::sin(half) / half : 1.0;
 }
 
 double LatticeDynamics::bimetal_ratio(int s, double kappa) const {
@@ -252,7 +260,7 @@ void LatticeDynamics::apply_bimetal(const Eigen::VectorXd& D, bool all) {
   // factor blends to 1/2, the mean over directions.
   const int C = topo_.couples;
   const RowMatX3& r = lat_.rest();
-  auto centre = [&](int c) { return Eigen::Vector3d(0.5 * (r.row(2 * c) + r.row(2 * c + 1)).transpose()); };
+  auto centre = [&](int c) { return couple_centre(r, c); };
   for (int c = 0; c < C; ++c) {
     bool near = all || delta_(c) != 0.0;
     for (int q = topo_.nbr_offset[c]; q < topo_.nbr_offset[c + 1] && !near; ++q) near = delta_(topo_.nbr_index[q]) != 0.0;
@@ -274,17 +282,29 @@ void LatticeDynamics::apply_bimetal(const Eigen::VectorXd& D, bool all) {
     const double along = u.dot(grad_dir_.row(c).transpose());
     return grad_share_(c) * along * along + (1.0 - grad_share_(c)) * 0.5;
   };
+  // The curvature between two couples: their mean D over spacing, along the front.
+  auto curvature = [&](int ca, int cb) {
+    Eigen::Vector3d u = centre(cb) - centre(ca);
+    u = u.norm() > 0 ? Eigen::Vector3d(u.normalized()) : u;
+    const double f = p_.anisotropic_curl ? 0.5 * (factor(ca, u) + factor(cb, u)) : 1.0;
+    return 0.5 * p_.crumple_gain * f * (D(ca) / couple_spacing_(ca) + D(cb) / couple_spacing_(cb));
+  };
   const int ns = static_cast<int>(sa_.size());
   parallel_for(0, ns, kRowCost, [&](long s_) {
     const int s = static_cast<int>(s_);
     const int ca = sa_[s] / 2, cb = sb_[s] / 2;
     if (ca == cb) return;  // a couple's own thickness spring keeps its length
     if (!changed_[ca] && !changed_[cb]) return;
-    Eigen::Vector3d u = centre(cb) - centre(ca);
-    u = u.norm() > 0 ? Eigen::Vector3d(u.normalized()) : u;
-    const double f = p_.anisotropic_curl ? 0.5 * (factor(ca, u) + factor(cb, u)) : 1.0;
-    const double kappa = 0.5 * p_.crumple_gain * f * (D(ca) / couple_spacing_(ca) + D(cb) / couple_spacing_(cb));
-    rest_len_[s] = base_len_[s] * bimetal_ratio(s, kappa);
+    rest_len_[s] = base_len_[s] * bimetal_ratio(s, curvature(ca, cb));
+  });
+  if (!membrane_) return;
+  // A membrane spring lies on the mid-surface: bent, its ends are a chord of the arc apart.
+  std::vector<double>& rest = membrane_->rest();
+  parallel_for(0, membrane_->size(), kRowCost, [&](long e_) {
+    const int e = static_cast<int>(e_);
+    const int ca = membrane_->couple_a(e), cb = membrane_->couple_b(e);
+    if (!changed_[ca] && !changed_[cb]) return;
+    rest[e] = membrane_->base()[e] * chord_ratio(curvature(ca, cb), membrane_->base()[e]);
   });
 }
 
@@ -301,6 +321,10 @@ void LatticeDynamics::build_springs() {
     rest_len_[s] = (lat_.rest().row(sb_[s]) - lat_.rest().row(sa_[s])).norm();
     if (kind_[s] == 3) vert_spring_[sa_[s] / 2] = s;
   }
+  build_incidence();
+}
+
+void LatticeDynamics::build_incidence() {
   const int ns = static_cast<int>(sa_.size());
   inc_start_.assign(n_ + 1, 0);
   for (int s = 0; s < ns; ++s) {
@@ -325,9 +349,62 @@ void LatticeDynamics::build_springs() {
                0.0);
 }
 
+double LatticeDynamics::lattice_rigidity() const {
+  double h = 0.0;
+  for (int s : vert_spring_) h += rest_len_[s];
+  h /= std::max(1, C_);
+  return 0.5 * h * h * p_.stiffness_unit * (p_.k_structure + p_.k_shear + 4.0 * p_.k_flex);
+}
+
+double LatticeDynamics::target_share() const {
+  if (!(p_.flexural_rigidity > 0.0)) return 1.0;
+  const double own = lattice_rigidity();
+  return own > 0.0 ? std::min(1.0, p_.flexural_rigidity / own) : 1.0;
+}
+
+void LatticeDynamics::add_membrane() {
+  // Once built, the membrane stays (a share back at 1 gives its springs zero stiffness).
+  membrane_ = std::make_unique<Membrane>(sa_, sb_, kind_);
+  const RowMatX3& r = lat_.rest();
+  for (const auto& [a, b] : membrane_->missing_diagonals(sa_, sb_)) {
+    sa_.push_back(a);
+    sb_.push_back(b);
+    kind_.push_back(kPatternSpring);
+    const double len = (r.row(b) - r.row(a)).norm();
+    rest_len_.push_back(len);
+    base_len_.push_back(len);
+    spring_scale_.push_back(0.5 * (strength_(a) + strength_(b)));
+  }
+  add_spring_geometry();
+  membrane_->link(sa_, sb_, r, C_);
+  build_incidence();
+  factor_ = std::make_unique<Factor>();  // the pattern gained blocks
+  refresh_membrane();
+  std::fill(awake_.begin(), awake_.end(), 1);
+}
+
+void LatticeDynamics::refresh_membrane() {
+  // Each pair of layer springs keeps bend_share_ of its stiffness; its membrane spring takes
+  // 2 (1 - share) k, so that the pair stretches as before (membrane.hpp). The flex pairs'
+  // membrane part joins the structure springs': under a uniform stretch a flex spring two
+  // spacings long stores what a structure spring of 4 k_flex does (exact on a grid's interior).
+  if (!membrane_) return;
+  std::vector<double>& k = membrane_->stiffness();
+  for (int e = 0; e < membrane_->size(); ++e) {
+    const int t = membrane_->top(e), b = membrane_->bottom(e);
+    const double layer = kind_[t] == 0 ? layer_k(0) + 4.0 * layer_k(2) : layer_k(kind_[t]);
+    k[e] = 2.0 * (1.0 - bend_share_) * layer * 0.5 * (spring_scale_[t] + spring_scale_[b]);
+  }
+}
+
+double LatticeDynamics::layer_k(int kind) const {
+  const double c[6] = {p_.k_structure, p_.k_shear, p_.k_flex, p_.k_thickness, p_.k_transverse, 0.0};
+  return c[kind] * p_.stiffness_unit;
+}
+
 double LatticeDynamics::spring_k(int s) const {
-  const double c[5] = {p_.k_structure, p_.k_shear, p_.k_flex, p_.k_thickness, p_.k_transverse};
-  return c[kind_[s]] * p_.stiffness_unit * spring_scale_[s];
+  const double share = membrane_ && membrane_->carried(s) ? bend_share_ : 1.0;
+  return layer_k(kind_[s]) * share * spring_scale_[s];
 }
 
 void LatticeDynamics::set_strength(const Eigen::VectorXd& s) {
@@ -340,6 +417,7 @@ void LatticeDynamics::set_strength(const Eigen::VectorXd& s) {
     if (s(v) != strength_(v)) awake_[v] = 1;
   strength_ = s;
   for (std::size_t q = 0; q < sa_.size(); ++q) spring_scale_[q] = 0.5 * (s(sa_[q]) + s(sb_[q]));
+  refresh_membrane();
 }
 
 void LatticeDynamics::set_params(const DynamicsParams& p) {
@@ -352,11 +430,14 @@ void LatticeDynamics::set_params(const DynamicsParams& p) {
       o.c_damping != p.c_damping || o.gravity != p.gravity || o.buoyancy != p.buoyancy ||
       o.wind_drag != p.wind_drag || o.has_floor != p.has_floor || o.floor_z != p.floor_z ||
       o.friction != p.friction || o.integrator != p.integrator || o.sleeping != p.sleeping ||
-      o.sleep_speed != p.sleep_speed || o.bimetal != p.bimetal ||
+      o.sleep_speed != p.sleep_speed || o.bimetal != p.bimetal || o.flexural_rigidity != p.flexural_rigidity ||
       (p.bimetal && o.crumple_gain != p.crumple_gain);
   if (o.integrator != p.integrator) forget_history();
   if (p.bimetal && (!o.bimetal || o.crumple_gain != p.crumple_gain || o.anisotropic_curl != p.anisotropic_curl)) bimetal_all_ = true;
   p_ = p;
+  bend_share_ = target_share();
+  if (bend_share_ < 1.0 && !membrane_) add_membrane();
+  refresh_membrane();
   if (moved) std::fill(awake_.begin(), awake_.end(), 1);
 }
 
@@ -382,6 +463,9 @@ void LatticeDynamics::rollback(Checkpoint&& c) {
   hist_stamp_ = std::move(c.hist_stamp);
   substep_count_ = c.substep_count;
   hist_h_ = c.hist_h;
+  spring_scale_.resize(sa_.size());  // a membrane added since the checkpoint: its springs' shares
+  for (std::size_t q = 0; q < sa_.size(); ++q) spring_scale_[q] = 0.5 * (strength_(sa_[q]) + strength_(sb_[q]));
+  refresh_membrane();
 }
 
 void LatticeDynamics::set_masses(const Eigen::VectorXd& m) {
@@ -469,6 +553,7 @@ Eigen::Vector3d LatticeDynamics::vertex_force(int v, const RowMatX3& x, const Ro
     const double l = d.norm();
     if (l > 1e-300) f += spring_k(s) * (l - rest_len_[s]) / l * d;
   }
+  if (membrane_) f += membrane_->force(v, x);
   if (p_.wind_drag > 0.0 && area_(v) > 0.0) {
     const Eigen::Vector3d n = couple_normal(v, x);
     const Eigen::Vector3d wind = wind_field_.rows() ? Eigen::Vector3d(wind_field_.row(v).transpose()) : wind_;
@@ -496,17 +581,18 @@ double LatticeDynamics::energy() const {
     const double dl = (x.row(sb_[s]) - x.row(sa_[s])).norm() - rest_len_[s];
     e += 0.5 * spring_k(int(s)) * dl * dl;
   }
-  return e;
+  return membrane_ ? e + membrane_->energy(x) : e;
 }
 
 Eigen::SparseMatrix<double> LatticeDynamics::stiffness_matrix() const {
   const RowMatX3& x = lat_.positions();
   std::vector<Eigen::Triplet<double>> t;
   t.reserve(sa_.size() * 36);
+  if (membrane_) membrane_->blocks(x, {}, false);
   for (std::size_t s = 0; s < sa_.size(); ++s) {
     const int a = sa_[s], b = sb_[s];
-    const Eigen::Matrix3d J =
-        spring_block((x.row(b) - x.row(a)).transpose(), spring_k(int(s)), rest_len_[s], false);
+    Eigen::Matrix3d J = spring_block((x.row(b) - x.row(a)).transpose(), spring_k(int(s)), rest_len_[s], false);
+    if (membrane_) J += membrane_->share(int(s));
     for (int r = 0; r < 3; ++r)
       for (int c = 0; c < 3; ++c) {
         t.emplace_back(3 * a + r, 3 * a + c, -J(r, c));
@@ -539,6 +625,7 @@ double LatticeDynamics::omega_bound(const std::vector<int>& verts) const {
       const double norm = spring_k(s) * std::max(1.0, g);
       b += norm * (1.0 / mass_(v) + 1.0 / std::sqrt(mass_(v) * mass_(o)));
     }
+    if (membrane_) b += membrane_->row_bound(v, x, mass_);
     worst = std::max(worst, b);
   }
   return std::sqrt(worst);
@@ -685,6 +772,15 @@ void LatticeDynamics::apply_plasticity() {
     const double after = (x.row(b) + disp_.row(b) - x.row(a) - disp_.row(a)).norm();
     rest_len_[s] = std::max(0.0, rest_len_[s] + p_.plasticity * (after - before));
   });
+  if (!membrane_) return;
+  std::vector<double>& rest = membrane_->rest();
+  for (int e = 0; e < membrane_->size(); ++e) {
+    const int ca = membrane_->couple_a(e), cb = membrane_->couple_b(e);
+    const Eigen::Vector3d d = couple_centre(x, cb) - couple_centre(x, ca);
+    const Eigen::Vector3d dd = couple_centre(disp_, cb) - couple_centre(disp_, ca);
+    if (dd.squaredNorm() == 0.0) continue;
+    rest[e] = std::max(0.0, rest[e] + p_.plasticity * ((d + dd).norm() - d.norm()));
+  }
 }
 
 double LatticeDynamics::max_active_strain() const {
@@ -693,10 +789,12 @@ double LatticeDynamics::max_active_strain() const {
   for (int v : active_)
     for (int q = inc_start_[v]; q < inc_start_[v + 1]; ++q) {
       const int s = inc_spring_[q], o = inc_other_[q];
-      if (rest_len_[s] <= 0.0) continue;
+      // A layer spring whose membrane part a membrane spring carries also bends: its strain
+      // is the curvature's (kappa h / 2), and the membrane spring's is the sheet's stretch.
+      if (rest_len_[s] <= 0.0 || kind_[s] == kPatternSpring || (membrane_ && membrane_->carried(s))) continue;
       worst = std::max(worst, std::abs((x.row(o) - x.row(v)).norm() / rest_len_[s] - 1.0));
     }
-  return worst;
+  return membrane_ ? std::max(worst, membrane_->max_strain(x, slot_)) : worst;
 }
 
 int LatticeDynamics::integrate(double dt, int substeps, StepStats& st) {
@@ -760,6 +858,7 @@ int LatticeDynamics::choose_substeps(double dt, double omega, double c_eff) cons
   for (int v : active_)
     for (int q = inc_start_[v]; q < inc_start_[v + 1]; ++q) {
       const int s = inc_spring_[q], o = inc_other_[q];
+      if (kind_[s] == kPatternSpring) continue;
       const double len = std::max(rest_len_[s], 1e-3 * (x.row(o) - x.row(v)).norm());
       if (len <= 0.0) continue;
       const double rel = (vel_.row(v) + drift_.row(v) - vel_.row(o) - drift_.row(o)).norm();
@@ -806,7 +905,9 @@ void LatticeDynamics::implicit_assemble(double h) {
   const int na = static_cast<int>(active_.size());
   const double h2 = h * h;
   // Jacobian blocks (clamped to positive semidefinite) of springs touching active vertices;
-  // each spring is computed by its smallest-index active endpoint.
+  // each spring is computed by its smallest-index active endpoint, with the membrane springs'
+  // shares of its block (membrane.hpp).
+  if (membrane_) membrane_->blocks(x, slot_, true);
   parallel_for(0, na, kRowCost, [&](long a_) {
     const int a = static_cast<int>(a_);
     const int v = active_[a];
@@ -814,7 +915,9 @@ void LatticeDynamics::implicit_assemble(double h) {
       const int s = inc_spring_[q], o = inc_other_[q];
       if (slot_[o] >= 0 && o < v) continue;
       const Eigen::Vector3d d = (x.row(o) - x.row(v)).transpose();
-      store_sym(B.jac + 6 * s, spring_block(d, spring_k(s), rest_len_[s], true));
+      Eigen::Matrix3d J = spring_block(d, spring_k(s), rest_len_[s], true);
+      if (membrane_) J += membrane_->share(s);
+      store_sym(B.jac + 6 * s, J);
     }
   });
   // Floor contact: a vertex on the floor that would move into it keeps v_z = 0 in this substep
@@ -1457,7 +1560,10 @@ StepStats LatticeDynamics::step(double dt, const Eigen::VectorXd& D, const Eigen
     wake_around_forcing();
   drift_ = disp_ / dt;
   const bool plastic = crumple && !p_.bimetal && p_.plasticity > 0.0;
-  if (plastic || bimetal) rest_save_ = rest_len_;
+  if (plastic || bimetal) {
+    rest_save_ = rest_len_;
+    if (membrane_) membrane_rest_save_ = membrane_->rest();
+  }
   if (bimetal) apply_bimetal(D, bimetal_all_);
   bool plastic_done = false;
   try {
@@ -1487,7 +1593,10 @@ StepStats LatticeDynamics::step(double dt, const Eigen::VectorXd& D, const Eigen
     }
   } catch (...) {
     heat_ = heat_save_;
-    if (plastic || bimetal) rest_len_ = rest_save_;
+    if (plastic || bimetal) {
+      rest_len_ = rest_save_;
+      if (membrane_) membrane_->rest() = membrane_rest_save_;
+    }
     throw;
   }
   if (bimetal) bimetal_all_ = false;

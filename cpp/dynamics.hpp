@@ -13,6 +13,7 @@
 
 #include "colliders.hpp"
 #include "lattice.hpp"
+#include "membrane.hpp"
 
 namespace thinburn {
 
@@ -48,6 +49,11 @@ struct DynamicsParams {
   double k_thickness = 1.0;    ///< coefficient of the top-bottom spring of each couple
   double k_transverse = 0.05;  ///< coefficient of the diagonals between adjacent couples' top and bottom
   double stiffness_unit = 1000.0;  ///< N/m per unit coefficient: spring k = coefficient * unit
+  /// N m: the sheet's flexural rigidity B (a thin plate's E t^3 / 12 (1 - nu^2)). 0: the
+  /// lattice's own, set by its layers' springs a thickness h apart (on a grid
+  /// B = h^2 / 2 (k_structure + k_shear + 4 k_flex) unit); a smaller B splits each pair of layer
+  /// springs into a membrane spring and a bending part (membrane.hpp); a larger one is the lattice's.
+  double flexural_rigidity = 0.0;
   double c_damping = 1.7;      ///< 1/s, eq 12 per kilogram: F = -c_damping * m * v
   Eigen::Vector3d gravity{0.0, 0.0, -9.81};  ///< m/s^2
   double buoyancy = 1.0;       ///< N/kg per unit heat: F = m * buoyancy * heat * (0, 0, 1)
@@ -191,13 +197,28 @@ class LatticeDynamics {
   /// @brief Springs and couple neighbours.
   const LatticeTopology& topology() const { return topo_; }
   /// @brief Spring kind per spring: 0 structure, 1 shear, 2 flex, 3 thickness (top-bottom of a
-  /// couple), 4 transverse (top-bottom diagonals between adjacent couples).
+  /// couple), 4 transverse (top-bottom diagonals between adjacent couples), 5 the zero-stiffness
+  /// top-bottom diagonals that carry the membrane springs' blocks (membrane.hpp).
   const std::vector<std::uint8_t>& spring_kinds() const { return kind_; }
+  /// @brief The lattice's own flexural rigidity, N m: h^2 / 2 (k_structure + k_shear +
+  /// 4 k_flex) unit, h the couples' mean rest thickness (exact for pure bending of a grid).
+  double lattice_rigidity() const;
+  /// @brief The share of the lattice's own bending that its layer springs keep: B / lattice
+  /// rigidity, at most 1 (1 when flexural_rigidity is 0).
+  double bending_share() const { return bend_share_; }
+  /// @brief Membrane springs between couples' centres (empty while bending_share() is 1).
+  int membrane_springs() const { return membrane_ ? membrane_->size() : 0; }
 
  private:
   struct Factor;
   void build_springs();
+  void build_incidence();
+  void add_spring_geometry();
   double spring_k(int s) const;
+  double layer_k(int kind) const;
+  double target_share() const;
+  void add_membrane();
+  void refresh_membrane();
   void wake_rings(std::vector<std::uint8_t>& flag, int rings) const;
   void collect_active();
   double omega_bound(const std::vector<int>& verts) const;
@@ -261,6 +282,9 @@ class LatticeDynamics {
   std::vector<std::uint8_t> changed_; // per couple: its springs' rest lengths are recomputed this step
   bool bimetal_all_ = true;           // the next bimetal step recomputes every spring
   std::vector<int> inc_start_, inc_spring_, inc_other_;
+  std::unique_ptr<Membrane> membrane_;  // null while the layers bend as the lattice's own
+  double bend_share_ = 1.0;             // bending_share()
+  std::vector<double> membrane_rest_save_;
   std::vector<int> vert_spring_;    // per couple: its top-bottom spring
   Eigen::VectorXd contact_;         // per vertex: floor impulse per mass of this substep, -1 if free
   std::vector<std::uint8_t> stick_; // per vertex: a contact held by static friction this substep

@@ -180,6 +180,10 @@ class Simulation {
   bool has_shell() const { return shell_ != nullptr; }
   int lattice_size() const { return shell_ ? shell_->size() : 0; }
   double lattice_thickness() const { return shell_ ? shell_->thickness() : 0.0; }
+  /// @brief The lattice's own flexural rigidity and the share of it its layers keep
+  /// (LatticeDynamics::lattice_rigidity, bending_share); 0 and 1 without a shell.
+  double lattice_rigidity() const { return shell_ ? shell_->dynamics().lattice_rigidity() : 0.0; }
+  double bending_share() const { return shell_ ? shell_->dynamics().bending_share() : 1.0; }
   /// @brief Couples of the lattice (M^2 on a grid).
   int lattice_couples() const { return shell_ ? shell_->couples() : 0; }
   /// @brief Control vertices (2 couples x 3), index 2 couple + k, k = 1 top; on a grid

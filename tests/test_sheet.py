@@ -102,8 +102,10 @@ def _folded_sheet():
     return v, f, edges
 
 
-def _edge_ratio_after_free_fall(v, f, edges, uv):
-    sim = thinburn.Simulation(v, f, uv=uv, cells=64)
+def _edge_ratio_after_free_fall(v, f, edges, uv, **kw):
+    # In vacuum (wind_drag=0): air drag on a falling sheet bends it (a paper with its real,
+    # soft, bending: 0.93 .. 1.00, docs/dynamics.md §1.1); free fall alone moves every point alike.
+    sim = thinburn.Simulation(v, f, uv=uv, cells=64, wind_drag=0.0, **kw)
     sim.run(1.0, dt=1 / 24)
     p = sim.vertex_positions()
     length = lambda x: np.linalg.norm(x[edges[:, 0]] - x[edges[:, 1]], axis=1)  # noqa: E731
@@ -112,21 +114,19 @@ def _edge_ratio_after_free_fall(v, f, edges, uv):
 
 def test_a_folded_sheet_falls_rigidly_with_or_without_uv():
     # Repro r9 (issue #11). A folded sheet is not flat, so its cells and lattice follow the
-    # surface; the UV map, when given, never routes anything. Measured 0.9889 .. 1.0167 after a
-    # 1 s free fall, with and without uv alike (the grid over the best-fit plane gave 0.577 ..
-    # 2.421 without uv; over the grid uv 0.946 .. 1.000).
+    # surface; the UV map, when given, never routes anything. Measured 1 - 8e-12 .. 1 + 4e-12
+    # after a 1 s free fall in vacuum, with and without uv alike (the grid over the best-fit
+    # plane gave 0.577 .. 2.421 without uv; with air drag 0.9889 .. 1.0167).
     v, f, edges = _folded_sheet()
     with_uv = _edge_ratio_after_free_fall(v, f, edges, grid_uv(22, 30))
     without = _edge_ratio_after_free_fall(v, f, edges, None)
     np.testing.assert_array_equal(with_uv, without)
-    assert 0.985 < without.min() and without.max() < 1.02
+    np.testing.assert_allclose(without, 1.0, rtol=0, atol=1e-9)
 
 
 def test_a_folded_sheet_on_the_grid_with_its_uv_falls_rigidly():
-    # geometry="plane" keeps the paper's grid over the UV map: measured 0.946 .. 1.000.
+    # geometry="plane" keeps the paper's grid over the UV map: measured 1 - 6e-13 .. 1 + 5e-13
+    # in vacuum (0.946 .. 1.000 with air drag).
     v, f, edges = _folded_sheet()
-    sim = thinburn.Simulation(v, f, uv=grid_uv(22, 30), cells=64, geometry="plane")
-    sim.run(1.0, dt=1 / 24)
-    p = sim.vertex_positions()
-    ratio = np.linalg.norm(p[edges[:, 0]] - p[edges[:, 1]], axis=1) / np.linalg.norm(v[edges[:, 0]] - v[edges[:, 1]], axis=1)
-    assert 0.94 < ratio.min() and ratio.max() < 1.01
+    ratio = _edge_ratio_after_free_fall(v, f, edges, grid_uv(22, 30), geometry="plane")
+    np.testing.assert_allclose(ratio, 1.0, rtol=0, atol=1e-9)

@@ -139,7 +139,9 @@ def test_wake_hold_cuts_redone_steps_on_a_held_cloth():
     counts = {}
     for hold in (0, 12):
         sim = build(default_scene("cloth"), "cloth", cells=64, threads=1)
-        sim.set_dynamics(wake_hold=hold)
+        # The lattice's own bending: the soft cloth's whole lattice keeps moving, so few vertices
+        # flicker (measured 161 against 189 passes) and the hold has little to cut.
+        sim.set_dynamics(wake_hold=hold, flexural_rigidity=0.0)
         passes = factorizations = 0
         for _ in range(150):
             sim.step(1 / 24)
@@ -345,9 +347,13 @@ def test_a_curtain_falls_back_below_its_pins_when_the_wind_stops():
 
 
 def _swinging_cloth(integrator, dt, T=1.0):
-    """A 0.4 m cloth pinned at two corners, released flat: 1 s of swinging, no fire."""
+    """A 0.4 m cloth pinned at two corners, released flat: 1 s of swinging, no fire. With the
+    lattice's own bending (flexural_rigidity=0): the preset's soft cloth flops in two, and at
+    these steps its errors are still pre-asymptotic (backward Euler 202, 126, 63, 34 mm at
+    1/24..1/192 s, orders 0.68, 0.98, 0.90; BDF2 0.77, 1.14, 1.93)."""
     v, f = rect_sheet(0.4, 0.4, nx=21, ny=21)
-    sim = thinburn.Simulation(v, f, material="cloth", cells=32, pinned=[0, 20], threads=1, lattice=5)
+    sim = thinburn.Simulation(v, f, material="cloth", cells=32, pinned=[0, 20], threads=1, lattice=5,
+                              flexural_rigidity=0.0)
     sim.set_dynamics(integrator=integrator, substeps=1, sleeping=False)
     sim.run(T, dt=dt)
     return sim.vertex_positions()
@@ -371,8 +377,10 @@ def test_both_implicit_integrators_converge_in_dt_to_one_motion():
 def test_fig9_cloth_held_at_its_corners_sinks_as_it_burns():
     """Fig. 9: the demo's 40 cm cloth held at its corners, lit in the middle, sinks once burnt
     cells have lost their mass and most of their strength. Lowest point after 8 s (the sag has
-    settled; unlit it does not move by a bit from 8 to 90 s) and after the whole burn (90 s):
-    233.1 -> 230.5 mm measured, 2.65 mm down (it used to rise, 270 -> 288 mm)."""
+    settled) and after the whole burn (90 s): 217.8 -> 202.6 mm measured, 15 mm down (it rises
+    8 mm while it burns, lifted by its heat). With the lattice's own bending it sank 2.65 mm;
+    with soft bending and ash as strong as it is heavy (ash_strength 0.1) it hung back at
+    217.77 mm (docs/materials.md, ash_strength)."""
     scene = default_scene("cloth")
     sim = thinburn.Simulation(scene.vertices, scene.faces, material="cloth", cells=48,
                               floor=scene.floor, pinned=scene.pinned, **scene.params)
@@ -381,7 +389,7 @@ def test_fig9_cloth_held_at_its_corners_sinks_as_it_burns():
     before = sim.vertex_positions()[:, 2].min()
     sim.run(82.0, dt=1 / 24)
     assert np.mean(sim.vertex_char() > 0.5) == 1.0  # all burnt
-    assert before - sim.vertex_positions()[:, 2].min() > 0.002
+    assert before - sim.vertex_positions()[:, 2].min() > 0.01
 
 
 def _mesh_edges(faces):

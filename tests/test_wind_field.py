@@ -50,9 +50,10 @@ def test_the_field_blows_where_it_is_set():
     x = _blow(sim, field=field)
     moved = np.abs(x[:, 1] - v[:, 1])
     near, far = v[:, 0] < 0.05, v[:, 0] > 0.25
-    # Measured: the left edge moved 2.5x as far as the right (80 vs 32 mm; the curtain is one
-    # piece, hanging from one pinned top, so the calm side is dragged along).
-    assert moved[near].mean() > 2.0 * moved[far].mean()
+    # Measured: the left edge moved 1.28x as far as the right (172 vs 134 mm; the curtain is one
+    # piece, hanging from one pinned top, so the calm side is dragged along; 2.5x, 80 vs 32 mm,
+    # with the lattice's own, stiffer, bending).
+    assert moved[near].mean() > 1.2 * moved[far].mean()
 
 
 def test_bad_wind_fields_say_what_is_expected():

@@ -50,6 +50,7 @@ void apply_kwargs(DynamicsParams& p, const py::kwargs& kw) {
                      : k == "k_thickness"    ? &p.k_thickness
                      : k == "k_transverse"   ? &p.k_transverse
                      : k == "stiffness_unit" ? &p.stiffness_unit
+                     : k == "flexural_rigidity" ? &p.flexural_rigidity
                      : k == "c_damping"      ? &p.c_damping
                      : k == "buoyancy"       ? &p.buoyancy
                      : k == "wind_drag"      ? &p.wind_drag
@@ -97,7 +98,7 @@ py::dict params_dict(const DynamicsParams& p) {
   const char* preconditioners[] = {"auto", "ldlt", "jacobi"};
   return py::dict("k_structure"_a = p.k_structure, "k_shear"_a = p.k_shear, "k_flex"_a = p.k_flex,
                   "k_thickness"_a = p.k_thickness, "k_transverse"_a = p.k_transverse,
-                  "stiffness_unit"_a = p.stiffness_unit,
+                  "stiffness_unit"_a = p.stiffness_unit, "flexural_rigidity"_a = p.flexural_rigidity,
                   "c_damping"_a = p.c_damping,
                   "gravity"_a = py::make_tuple(p.gravity.x(), p.gravity.y(), p.gravity.z()),
                   "buoyancy"_a = p.buoyancy, "wind_drag"_a = p.wind_drag,
@@ -232,7 +233,14 @@ void define_dynamics(py::module_& m) {
         py::array_t<std::uint8_t> out(k.size());
         std::copy(k.begin(), k.end(), out.mutable_data());
         return out;
-      }, "0 structure, 1 shear, 2 flex, 3 thickness (top-bottom), 4 transverse (diagonals).");
+      }, "0 structure, 1 shear, 2 flex, 3 thickness (top-bottom), 4 transverse (diagonals), "
+         "5 zero-stiffness diagonals carrying the membrane springs' blocks.")
+      .def_property_readonly("lattice_rigidity", &LatticeDynamics::lattice_rigidity,
+                             "N m: the lattice's own flexural rigidity, h^2/2 (k_structure + k_shear + 4 k_flex) unit.")
+      .def_property_readonly("bending_share", &LatticeDynamics::bending_share,
+                             "Share of the lattice's own bending its layer springs keep (flexural_rigidity / lattice_rigidity, <= 1).")
+      .def_property_readonly("membrane_springs", &LatticeDynamics::membrane_springs,
+                             "Membrane springs between couples' centres (0 while bending_share is 1).");
 
   m.def(
       "explicit_stability_limit",

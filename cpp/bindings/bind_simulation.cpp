@@ -221,6 +221,8 @@ void define_simulation(py::module_& m) {
       .def_property_readonly("lattice_size", &S::lattice_size)
       .def_property_readonly("lattice_couples", &S::lattice_couples)
       .def_property_readonly("lattice_thickness", &S::lattice_thickness)
+      .def_property_readonly("lattice_rigidity", &S::lattice_rigidity)
+      .def_property_readonly("bending_share", &S::bending_share)
       .def("lattice_positions", &S::lattice_positions)
       .def("lattice_rest_positions", [](const S& s) { return s.lattice() ? s.lattice()->rest() : RowMatX3(0, 3); })
       .def("control_masses", &S::control_masses)

@@ -39,6 +39,9 @@ class Material:
     ash_strength: float = 0.1     # share of the lattice's stiffness burnt sheet keeps (Fig. 9)
     alpha: float = 1.0            # eq 6: radians of rotation per unit heat difference
     beta: float = 1e-3            # eq 6: radians per unit pyrolysis difference (1/m)
+    # The sheet's flexural rigidity B, N m (bending ∝ thickness^3; docs/materials.md): the
+    # lattice's layers bend with it instead of their own, much stiffer, rigidity. 0: the lattice's.
+    flexural_rigidity: float = 0.0
 
     @property
     def areal_density(self) -> float:
@@ -59,16 +62,18 @@ class Material:
 
 
 _TABLE1 = (
-    # name, mass, V0, Cp, C_damping, K_structure, K_shear, K_flex, figure, burn_duration
-    ("paper", 0.45, 3.5, 1.0, 1.7, 0.05, 0.05, 0.05, 8, 4.0),
-    ("cloth", 1.45, 4.0, 0.8, 2.5, 0.3, 0.01, 0.04, 9, 6.0),
-    ("hard_paper", 10.45, 3.5, 1.0, 1.7, 0.5, 0.01, 0.001, 10, 6.0),
-    ("silk", 6.45, 4.0, 0.8, 2.5, 0.01, 0.01, 0.01, 11, 3.0),
-    ("curtain", 1.45, 4.0, 0.8, 2.5, 0.3, 0.01, 0.04, 12, 6.0),
+    # name, mass, V0, Cp, C_damping, K_structure, K_shear, K_flex, figure, then ours:
+    # burn_duration, flexural_rigidity (N m, docs/materials.md "Bending"), ash_strength
+    ("paper", 0.45, 3.5, 1.0, 1.7, 0.05, 0.05, 0.05, 8, 4.0, 0.0, 0.1),
+    ("cloth", 1.45, 4.0, 0.8, 2.5, 0.3, 0.01, 0.04, 9, 6.0, 5e-6, 0.03),
+    ("hard_paper", 10.45, 3.5, 1.0, 1.7, 0.5, 0.01, 0.001, 10, 6.0, 0.5, 0.1),
+    ("silk", 6.45, 4.0, 0.8, 2.5, 0.01, 0.01, 0.01, 11, 3.0, 3e-6, 0.03),
+    ("curtain", 1.45, 4.0, 0.8, 2.5, 0.3, 0.01, 0.04, 12, 6.0, 2e-5, 0.03),
 )
 
 MATERIALS = MappingProxyType({
-    row[0]: Material(*row[:9], burn_duration=row[9]) for row in _TABLE1
+    row[0]: Material(*row[:9], burn_duration=row[9], flexural_rigidity=row[10], ash_strength=row[11])
+    for row in _TABLE1
 })
 """The five presets of Table 1, by name."""
 

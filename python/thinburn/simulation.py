@@ -42,7 +42,7 @@ CRUMPLE_REFERENCE_K = 0.05  # Table 1's K_structure for paper: its crumple gain 
 # Keyword overrides of the shell's parts, passed on to the core's parameter groups (which
 # validate them and name the field in their errors). See docs/dynamics.md, docs/particles.md,
 # docs/bending.md for units and meanings.
-DYNAMICS_KEYS = ("k_thickness", "k_transverse", "stiffness_unit", "buoyancy", "wind_drag", "friction",
+DYNAMICS_KEYS = ("k_thickness", "k_transverse", "stiffness_unit", "flexural_rigidity", "buoyancy", "wind_drag", "friction",
                  "crumple_gain", "plasticity", "crumple_momentum", "bimetal", "anisotropic_curl", "sleep_speed", "sleeping", "substeps", "max_substeps",
                  "safety", "max_stretch", "cg_tolerance", "cg_max_iterations", "gravity",
                  "preconditioner", "ldlt_max_vertices", "refactor_iterations", "wake_hold")
@@ -138,7 +138,9 @@ class Simulation:
           holds little together; docs/materials.md);
         * the bending (eqs 2-6): ``ct``, ``alpha``, ``beta``, ``d_min``, ``max_rotation``,
           ``heat_tolerance``, ``heat_fast``;
-        * the motion: ``k_thickness``, ``k_transverse``, ``stiffness_unit``, ``buoyancy``,
+        * the motion: ``k_thickness``, ``k_transverse``, ``stiffness_unit``,
+          ``flexural_rigidity`` (N m, default the material's: the sheet bends with it, not with
+          the lattice's own layers, docs/dynamics.md §1.1), ``buoyancy``,
           ``wind_drag``, ``friction``, ``crumple_gain``, ``plasticity``, ``crumple_momentum``,
           ``bimetal`` (default True: D shrinks the heated face's springs, docs/dynamics.md §2;
           False: the paper's prescribed chord motion), ``sleep_speed``,
@@ -230,6 +232,7 @@ class Simulation:
         # times stiffer, bends a tenth as much: Fig. 10).
         material_dynamics = dict(k_structure=mat.K_structure, k_shear=mat.K_shear, k_flex=mat.K_flex,
                                  c_damping=mat.C_damping, k_transverse=mat.K_structure,
+                                 flexural_rigidity=mat.flexural_rigidity,
                                  max_stretch=1.0, crumple_momentum=True, bimetal=True, anisotropic_curl=True,
                                  crumple_gain=CRUMPLE_REFERENCE_K / V.real(
                                      mat.K_structure, "material.K_structure", low=0.0, low_open=True))
@@ -443,6 +446,18 @@ class Simulation:
     def lattice_thickness(self) -> float:
         """Distance between a couple's top and bottom control vertices, m."""
         return self._sim.lattice_thickness
+
+    @property
+    def lattice_rigidity(self) -> float:
+        """The lattice's own flexural rigidity, N m: its layers' springs a thickness apart
+        (docs/dynamics.md §1.1); 0 without a shell."""
+        return self._sim.lattice_rigidity
+
+    @property
+    def bending_share(self) -> float:
+        """flexural_rigidity / lattice_rigidity, at most 1: the share of the lattice's own
+        bending its layers keep (1: the lattice bends as its own)."""
+        return self._sim.bending_share
 
     @property
     def lattice_couples(self) -> int:
