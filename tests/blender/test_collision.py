@@ -40,11 +40,11 @@ def test_a_sheet_drapes_over_a_sphere_with_collision(addon, tmp_path):
     # the true sphere; measured: no cache vertex nearer the centre than R + 5.7 mm (frame 36).
     assert r.min() > R - 0.002
     centre = np.argmin(np.linalg.norm(last[:, :2], axis=1))
-    rim = np.max(np.abs(last[:, :2]), axis=1) > 0.19
-    # Lower at the rim than at the top: measured, the highest rim vertex 0.1744 m (the top 0.2 m;
-    # the cloth at Motion Detail 16 bends little over 0.1 m), the middle 5.7 mm above the top
-    # (margin + half the lattice thickness + Outer thickness).
-    assert last[rim, 2].max() < TOP - 0.02
+    rim = np.max(np.abs(data[0][:, :2].astype(np.float64)), axis=1) > 0.19  # the sheet's edge at rest
+    # Lower at the rim than at the top: measured, the highest rim vertex 0.132 m (the top 0.2 m;
+    # 0.1744 m when the cloth bent with its lattice's own rigidity, docs/dynamics.md §1.1), the
+    # middle 5.6 mm above the top (margin + half the lattice thickness + Outer thickness).
+    assert last[rim, 2].max() < TOP - 0.05
     assert TOP < last[centre, 2] < TOP + 0.01
 
 
