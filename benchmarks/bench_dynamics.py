@@ -2,7 +2,7 @@
 a sheet lying on a floor with a small hot spot; plus the measured stability limits and
 convergence orders of the integrators against theory. Prints and writes JSON.
 
-    python scripts/bench_dynamics.py [--sizes 8 16 32 64] [--frames 12] [--threads 1]
+    python -m benchmarks.bench_dynamics [--sizes 8 16 32 64] [--frames 12] [--threads 1]
                                      [--out bench_dynamics.json] [--no-theory] [--wake-hold 12]
                                      [--ldlt-max-vertices N]
 """
@@ -17,9 +17,10 @@ import numpy as np
 
 import thinburn
 from thinburn import _core
-from thinburn.bench import oscillator_error
 from thinburn.dynamics import vertex_masses
 from thinburn.lattice import flat_rest
+
+from .bench import oscillator_error
 
 SIDE, THICKNESS, DENSITY, DT = 0.3, 0.002, 0.08, 1 / 24
 
