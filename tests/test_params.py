@@ -1,5 +1,6 @@
 """Where the model's parameters live (issue #11, item 5): the crumple's defaults are the core's
-own, so a core Simulation built with nothing set is the Python one."""
+own, so a core Simulation built with nothing set is the Python one; and Simulation.params is a
+read-only view of the values in force."""
 import numpy as np
 import pytest
 
@@ -68,3 +69,30 @@ def test_set_material_names_table_1s_coefficient():
     with pytest.raises(TypeError, match="K_flex must be a real number"):
         p.set_material(k_structure=0.05, k_shear=0.05, k_flex="stiff", c_damping=1.7)
     assert p.dynamics["crumple_gain"] == 1.0  # nothing was set by the failed calls
+
+
+def test_a_kept_params_view_reads_the_values_in_force(a4):
+    """Issue #11: a view kept across set_dynamics read the old wind_drag (a snapshot)."""
+    sim = thinburn.Simulation(*a4, cells=16, floor=0.0)
+    view = sim.params
+    dynamics = view.dynamics
+    sim.set_dynamics(wind_drag=2.0, integrator="symplectic")
+    assert view.dynamics["wind_drag"] == 2.0 and view.dynamics["integrator"] == "symplectic"
+    assert dynamics["wind_drag"] == 1.0  # a group read before is the group as it was then
+    with pytest.raises(TypeError):
+        view.dynamics["wind_drag"] = 3.0  # a group is read-only too: it could not change the model
+    with pytest.raises(AttributeError, match="read-only"):
+        view.cells = 32
+    assert view.cells == 16 and "dynamics" in dir(view)
+
+
+def test_the_floor_in_force_shows_in_the_motions_parameters(a4):
+    """floor= is the Simulation's; the motion's has_floor / floor_z read it, also after a
+    set_dynamics (they read False and 0 before, with a floor under the sheet)."""
+    v, f = a4
+    sim = thinburn.Simulation(v + [0, 0, 0.3], f, cells=16, floor=0.25)
+    assert (sim.params.dynamics["has_floor"], sim.params.dynamics["floor_z"]) == (True, 0.25)
+    sim.set_dynamics(wind_drag=2.0)
+    assert (sim.params.dynamics["has_floor"], sim.params.dynamics["floor_z"]) == (True, 0.25)
+    free = thinburn.Simulation(*a4, cells=16)
+    assert free.params.dynamics["has_floor"] is False

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import threading
+from types import MappingProxyType
 
 import numpy as np
 
@@ -341,9 +342,10 @@ class Simulation:
 
     @property
     def params(self) -> "ParamsView":
-        """The model's parameters in force now (after any ``set_dynamics``), read-only:
-        ``sim.params.cells``, ``sim.params.dynamics["wind_drag"]``."""
-        return ParamsView(self._sim.params)
+        """The model's parameters in force, read-only: ``sim.params.cells``,
+        ``sim.params.dynamics["wind_drag"]``. A live view: a view kept across a
+        ``set_dynamics`` reads the new values."""
+        return ParamsView(self._sim)
 
     @property
     def time(self) -> float:
@@ -628,29 +630,33 @@ class Simulation:
 
 
 class ParamsView:
-    """A read-only view of a Simulation's parameters (a snapshot taken when it was read)."""
+    """A read-only view of a Simulation's parameters: every read asks the core for the values in
+    force then (a view kept across ``set_dynamics`` does not go stale); the groups (``dynamics``,
+    ``bending``, ``particles``) read as read-only mappings."""
 
-    __slots__ = ("_p",)
+    __slots__ = ("_sim",)
 
-    def __init__(self, core_params):
-        object.__setattr__(self, "_p", core_params)
+    def __init__(self, core_sim):
+        object.__setattr__(self, "_sim", core_sim)
 
     def __getattr__(self, name):
-        value = getattr(self._p, name)
+        value = getattr(self._sim.params, name)
         if callable(value):  # the core struct's setters: not part of a read-only view
             raise AttributeError(f"Simulation.params has no {name!r}; change the motion's parameters "
                                  "with sim.set_dynamics(...)")
-        return value
+        return MappingProxyType(value) if isinstance(value, dict) else value
 
     def __setattr__(self, name, value):
         raise AttributeError(f"Simulation.params is read-only ({name!r}): pass model parameters to "
                              "Simulation(...), or change the motion's with sim.set_dynamics(...)")
 
     def __dir__(self):
-        return [n for n in dir(self._p) if not n.startswith("_") and not callable(getattr(self._p, n))]
+        p = self._sim.params
+        return [n for n in dir(p) if not n.startswith("_") and not callable(getattr(p, n))]
 
     def __repr__(self):
-        return f"ParamsView(cells={self._p.cells}, front={self._p.front!r}, dynamics={self._p.dynamics})"
+        p = self._sim.params
+        return f"ParamsView(cells={p.cells}, front={p.front!r}, dynamics={p.dynamics})"
 
 
 class _Serialised:
