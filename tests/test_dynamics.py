@@ -664,6 +664,7 @@ def test_params_round_trip_and_presets():
     lat, dyn = make(M, **preset("cloth", integrator="symplectic"))
     p = dyn.params
     assert p["k_structure"] == 0.3 and p["k_transverse"] == 0.3 and p["c_damping"] == 2.5
+    assert p["crumple_gain"] == 0.05 / 0.3  # the core's set_material, as a cloth Simulation's
     assert p["integrator"] == "symplectic"
     dyn.set_params(wind_drag=2.0)
     assert dyn.params["wind_drag"] == 2.0 and dyn.params["k_structure"] == 0.3
