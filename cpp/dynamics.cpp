@@ -118,6 +118,25 @@ void validate(const DynamicsParams& p) {
           "wake_hold must be in [0, " + std::to_string(kMaxHold) + "]");
 }
 
+void set_material(DynamicsParams& p, double k_structure, double k_shear, double k_flex, double c_damping) {
+  // Table 1's names: the caller's material spells them so.
+  const auto check = [](double v, const char* name, bool positive) {
+    if (!std::isfinite(v) || v < 0.0 || (positive && v == 0.0))
+      throw std::invalid_argument(std::string(name) + (positive ? " must be > 0" : " must be >= 0") +
+                                  " and finite, got " + std::to_string(v));
+  };
+  check(k_structure, "K_structure", true);
+  check(k_shear, "K_shear", false);
+  check(k_flex, "K_flex", false);
+  check(c_damping, "C_damping", false);
+  p.k_structure = k_structure;
+  p.k_shear = k_shear;
+  p.k_flex = k_flex;
+  p.c_damping = c_damping;
+  p.k_transverse = k_structure;
+  p.crumple_gain = kCrumpleReferenceK / k_structure;
+}
+
 // The implicit system over the active vertices, lower triangle of 3x3 blocks by columns, and its
 // sparse block LDL^T factorization (block_ldlt.hpp), the conjugate gradients' preconditioner.
 // The pattern depends only on the active set: values are refilled in the order the pattern was

@@ -57,6 +57,7 @@ Simulation::Simulation(const RowMatX3& vertices, const RowMatX3i& faces, const R
   if (!(params.v0 > 0)) throw std::invalid_argument("v0 must be > 0");
   if (!(params.burn_duration > 0)) throw std::invalid_argument("burn_duration must be > 0");
   if (!(params.ash_strength >= 0 && params.ash_strength <= 1)) throw std::invalid_argument("ash_strength must be in [0, 1]");
+  show_floor_in_dynamics();
   bind_cells();
   const int nc = cells_->size();
   state_.assign(nc, kUnburnt);
@@ -677,6 +678,14 @@ void Simulation::set_dynamics_params(const DynamicsParams& p) {
   if (!shell_) throw std::invalid_argument("dynamics: this simulation has no shell");
   shell_->set_dynamics_params(p);
   params_.dynamics = p;
+  show_floor_in_dynamics();
+}
+
+void Simulation::show_floor_in_dynamics() {
+  // The floor is the simulation's (the shell lowers it by half the lattice's thickness for the
+  // motion): the motion's copy of it shows the one in force, so params() reads as it acts.
+  params_.dynamics.has_floor = params_.has_floor;
+  params_.dynamics.floor_z = params_.floor_z;
 }
 
 const RowMatX3& Simulation::lattice_positions() const {

@@ -211,6 +211,7 @@ class Simulation {
   void refresh_locator() const;
   void retire_burnt();
   ShellParams shell_params() const;
+  void show_floor_in_dynamics();
   void step_shell(double dt);
   void gather_shell_sources();
   double flame_side(int cell) const;

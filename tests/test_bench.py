@@ -1,4 +1,4 @@
-"""python -m thinburn.bench --quick: rows for every part and method, the fronts' errors on
+"""python -m benchmarks --quick: rows for every part and method, the fronts' errors on
 cases no method is exact on (the grid front's converge with its order, the surface front's
 fall with resolution; the closed form they are scored against checked on its own), the
 symplectic stability limit, and valid images; the performance parts
@@ -7,6 +7,10 @@ finite, the FFD bound's arithmetic. No timing is asserted."""
 import json
 import math
 import os
+import re
+import subprocess
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -14,13 +18,12 @@ from PIL import Image
 
 import thinburn
 from thinburn import FRONT_METHODS
-from thinburn import _bench_fronts as fronts
-from thinburn import _bench_perf as perf
 from thinburn import _core
-from thinburn import bench
 from thinburn._threads import measure_memory_bandwidth
 from thinburn.demo import build, default_scene
 from thinburn.lattice import flat_rest
+
+from benchmarks import bench, fronts, perf
 
 
 @pytest.fixture(scope="module")
@@ -195,6 +198,20 @@ def test_bad_arguments(tmp_path, capsys):
     assert "not a writable directory" in capsys.readouterr().err
 
 
+def test_the_benchmarks_run_from_the_repository_and_stay_out_of_the_package():
+    """`python -m benchmarks` runs from the repository root; the installed package holds no
+    bench module and imports nothing from `benchmarks` (a fresh install must not need it)."""
+    root = Path(__file__).resolve().parents[1]
+    run = subprocess.run([sys.executable, "-m", "benchmarks", "--help"], cwd=root,
+                         capture_output=True, text=True, check=True)
+    assert run.stdout.startswith("usage: python -m benchmarks")
+    package = Path(thinburn.__file__).parent
+    assert [p.name for p in package.glob("*bench*.py")] == []
+    importers = [p.name for p in package.rglob("*.py")
+                 if re.search(r"^\s*(from|import) benchmarks\b", p.read_text(), re.M)]
+    assert importers == []
+
+
 # ---------------------------------------------------------------- performance parts
 
 
@@ -353,7 +370,7 @@ def test_motion_part_rows_figure_and_the_default_integrators_convergence(tmp_pat
     """--quick --parts motion: a row per scene, integrator and dt, a valid motion.png; and at
     dt = 1/24 s the default (backward Euler) is within 2 % of its 1/240 s reference on both
     quick scenes (measured 0.2 % and 0.5 %; issue #12 asks for 15 %)."""
-    from thinburn import _bench_motion as motion
+    from benchmarks import motion
     assert bench.main(["--quick", "--parts", "motion", "--out", tmp_path]) == 0
     with open(tmp_path / "results.json") as f:
         rows = [r for r in json.load(f) if r["part"] == "motion"]

@@ -97,5 +97,5 @@ def test_bad_arrays_name_themselves():
 
 
 def test_defaults_are_the_documented_ones():
-    assert DEFAULTS == dict(ct=1e-7, cp=1.0, alpha=1.0, beta=1e-3, d_min=0.005, max_rotation=1.2,
+    assert DEFAULTS == dict(ct=1e-7, cp=1.0, alpha=1.0, beta=1e-3, d_min=0.005, max_rotation=0.4,
                             heat_tolerance=0.01, heat_fast=True)

@@ -1,7 +1,7 @@
 """The fire front (paper §3, eq 1): arrival times against closed forms.
 
 Tolerances are stated next to each assertion with the value measured when they were set
-(docs/fire_front.md; `python scripts/bench_fire_front.py` reproduces the point-source ones).
+(docs/fire_front.md; `python -m benchmarks.bench_fire_front` reproduces the point-source ones).
 """
 import math
 

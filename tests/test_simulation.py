@@ -223,7 +223,7 @@ def test_bad_material_and_params(square):
         thinburn.Simulation(*square, material=3)
     with pytest.raises(ValueError, match="material.V0"):
         thinburn.Simulation(*square, material=thinburn.MATERIALS["paper"].with_(V0=-1.0))
-    with pytest.raises(ValueError, match="material.K_structure"):
+    with pytest.raises(ValueError, match="material: K_structure must be > 0"):
         thinburn.Simulation(*square, material=thinburn.MATERIALS["paper"].with_(K_structure=0.0))
     with pytest.raises(TypeError, match="unexpected keyword.*bogus"):
         thinburn.Simulation(*square, bogus=1.0)

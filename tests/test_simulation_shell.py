@@ -428,7 +428,7 @@ def test_implicit_and_symplectic_agree_on_paper_on_its_table(wind):
     motion, measured 3.0 % and 1.9 % (the issue allows 15 %). Before friction acted before each
     symplectic substep's move (and inside the implicit solve), the symplectic sheet crept 9 mm
     and the implicit one 0.39 m across the table in the wind."""
-    from thinburn._bench_motion import motion_run, relative_error
+    from benchmarks.motion import motion_run, relative_error
     rest, implicit, _ = motion_run("paper", wind, "implicit", 1 / 24, 20.0)
     _, symplectic, _ = motion_run("paper", wind, "symplectic", 1 / 24, 20.0)
     assert relative_error(symplectic, implicit, rest) < 0.045

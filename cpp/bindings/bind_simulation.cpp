@@ -99,6 +99,15 @@ void define_params(py::module_& m) {
       .def_readwrite("has_floor", &SimulationParams::has_floor)
       .def_readwrite("floor_z", &SimulationParams::floor_z)
       .def("set_dynamics", [](SimulationParams& s, const py::dict& kw) { apply_dynamics_kwargs(s.dynamics, kw); })
+      .def("set_material",
+           [](SimulationParams& s, const py::handle& k_structure, const py::handle& k_shear,
+              const py::handle& k_flex, const py::handle& c_damping) {
+             set_material(s.dynamics, to_double("K_structure", k_structure), to_double("K_shear", k_shear),
+                          to_double("K_flex", k_flex), to_double("C_damping", c_damping));
+           },
+           py::arg("k_structure"), py::arg("k_shear"), py::arg("k_flex"), py::arg("c_damping"),
+           "A Table 1 material's springs and damping, with the transverse springs and the crumple "
+           "gain that follow from them (thinburn::set_material).")
       .def("set_particles", [](SimulationParams& s, const py::dict& kw) { apply_particle_kwargs(s.particles, kw); })
       .def("set_bending", [](SimulationParams& s, const py::dict& kw) { apply_bending_kwargs(s.bending, kw); })
       .def_property_readonly("dynamics", [](const SimulationParams& s) { return dynamics_params_dict(s.dynamics); })

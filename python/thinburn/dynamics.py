@@ -19,14 +19,20 @@ crumple_displacements = _core.crumple_displacements
 __all__ = ["PRESETS", "Integrator", "LatticeDynamics", "StepStats", "crumple_displacements",
            "explicit_stability_limit", "preset", "vertex_masses"]
 
-# Paper Table 1 (thinburn.MATERIALS): spring coefficients (times stiffness_unit N/m) and
-# C_damping (1/s, per kg). The transverse diagonals (not in the paper) take the structure
-# coefficient: they act as structure springs between the layers.
-PRESETS = {
-    name: dict(k_structure=m.K_structure, k_shear=m.K_shear, k_flex=m.K_flex, c_damping=m.C_damping,
-               k_transverse=m.K_structure)
-    for name, m in MATERIALS.items()
-}
+# The motion of each Table 1 row (thinburn.MATERIALS), as a Simulation of that material gets
+# it: spring coefficients (times stiffness_unit N/m), C_damping (1/s, per kg), and what the
+# core's set_material derives from them (the transverse diagonals as stiff as the structure
+# springs, crumple_gain = 0.05 / K_structure; docs/materials.md).
+_MATERIAL_KEYS = ("k_structure", "k_shear", "k_flex", "c_damping", "k_transverse", "crumple_gain")
+
+
+def _material_motion(m) -> dict:
+    p = _core.SimulationParams()
+    p.set_material(k_structure=m.K_structure, k_shear=m.K_shear, k_flex=m.K_flex, c_damping=m.C_damping)
+    return {k: p.dynamics[k] for k in _MATERIAL_KEYS}
+
+
+PRESETS = {name: _material_motion(m) for name, m in MATERIALS.items()}
 
 
 def preset(name: str, **overrides) -> dict:

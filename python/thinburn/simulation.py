@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import threading
+from types import MappingProxyType
 
 import numpy as np
 
@@ -19,8 +20,6 @@ INTEGRATORS = ("implicit", "bdf2", "symplectic", "explicit")
 # on the surface itself and a lattice on a control surface fitted to it; "auto", the plane for
 # a flat mesh (or for the cellular fronts, defined on a grid only), the surface for any other.
 GEOMETRIES = ("auto", "plane", "surface")
-# Default bend limit of a couple (the bending's max_rotation, rad) for the material presets.
-CURL_MAX_ROTATION = 0.4
 
 # Coordinates the model can take (r6, measured): offsets up to 1e6 m keep the motion within
 # 1e-8 m of the same sheet at the origin (1e8 m: 3e-7 m, 1e10 m: 5e-5 m); a sheet smaller than
@@ -37,7 +36,6 @@ MAX_WIND = 1e3
 # Simulation.run: duration / dt beyond this many steps (hours even at a millisecond a step)
 # is refused rather than looping for ever (run(1e300) did).
 MAX_RUN_STEPS = 10_000_000
-CRUMPLE_REFERENCE_K = 0.05  # Table 1's K_structure for paper: its crumple gain is 1
 
 # Keyword overrides of the shell's parts, passed on to the core's parameter groups (which
 # validate them and name the field in their errors). See docs/dynamics.md, docs/particles.md,
@@ -224,25 +222,14 @@ class Simulation:
             elif key.startswith(PARTICLE_PREFIX) and key[len(PARTICLE_PREFIX):] in PARTICLE_KEYS:
                 groups["particles"][key[len(PARTICLE_PREFIX):]] = overrides.pop(key)
         p = Simulation._fire_params(mat, cells, seed, front, overrides)
-        # max_stretch=1 lets a frame's crumple go in one substep. The conjugate gradients keep
-        # the core's 1e-8 relative residual: a looser solve (1e-4 was tried) leaves residual
-        # forces that, on light ash late in a burn, push the sheet tens of cm across the table.
-        # D is a thermal moment; a stiffer sheet answers it with less curvature, so the crumple
-        # gain scales as K_structure of the paper preset over the material's (hard paper, ten
-        # times stiffer, bends a tenth as much: Fig. 10).
-        material_dynamics = dict(k_structure=mat.K_structure, k_shear=mat.K_shear, k_flex=mat.K_flex,
-                                 c_damping=mat.C_damping, k_transverse=mat.K_structure,
-                                 flexural_rigidity=mat.flexural_rigidity,
-                                 max_stretch=1.0, crumple_momentum=True, bimetal=True, anisotropic_curl=True,
-                                 crumple_gain=CRUMPLE_REFERENCE_K / V.real(
-                                     mat.K_structure, "material.K_structure", low=0.0, low_open=True))
-        _set_group(p.set_dynamics, "material", material_dynamics)
-        # The curl rolls across the front, at most CURL_MAX_ROTATION between neighbouring couples:
-        # a lattice bent further squashes the sheet it carries (a chord is shorter than its arc),
-        # measured unburnt-edge strain p99 at 40 s, 96 cells: A4 on a table 7.8 % -> 0.5 %, a
-        # lantern 13 % -> 1.6 %, a sphere 9.3 % -> 0.5 % (scripts/shell_strain.py, docs/dynamics.md §2).
-        _set_group(p.set_bending, "material", dict(cp=mat.Cp, alpha=mat.alpha, beta=mat.beta,
-                                                   max_rotation=CURL_MAX_ROTATION))
+        # The crumple's and the curl's defaults (bimetal, max_stretch, max_rotation, ...) are the
+        # core's; set_material derives the transverse springs and the crumple gain from K_structure.
+        _set_group(lambda m: p.set_material(**m), "material",
+                   dict(k_structure=mat.K_structure, k_shear=mat.K_shear, k_flex=mat.K_flex,
+                        c_damping=mat.C_damping))
+        # The sheet's own bending (docs/dynamics.md §1.1; 0: the lattice's).
+        _set_group(p.set_dynamics, "material", dict(flexural_rigidity=mat.flexural_rigidity))
+        _set_group(p.set_bending, "material", dict(cp=mat.Cp, alpha=mat.alpha, beta=mat.beta))
         _set_group(p.set_dynamics, None, groups["dynamics"])
         _set_group(p.set_bending, None, groups["bending"])
         _set_group(p.set_particles, PARTICLE_PREFIX, groups["particles"])
@@ -359,9 +346,10 @@ class Simulation:
 
     @property
     def params(self) -> "ParamsView":
-        """The model's parameters in force now (after any ``set_dynamics``), read-only:
-        ``sim.params.cells``, ``sim.params.dynamics["wind_drag"]``."""
-        return ParamsView(self._sim.params)
+        """The model's parameters in force, read-only: ``sim.params.cells``,
+        ``sim.params.dynamics["wind_drag"]``. A live view: a view kept across a
+        ``set_dynamics`` reads the new values."""
+        return ParamsView(self._sim)
 
     @property
     def time(self) -> float:
@@ -658,29 +646,33 @@ class Simulation:
 
 
 class ParamsView:
-    """A read-only view of a Simulation's parameters (a snapshot taken when it was read)."""
+    """A read-only view of a Simulation's parameters: every read asks the core for the values in
+    force then (a view kept across ``set_dynamics`` does not go stale); the groups (``dynamics``,
+    ``bending``, ``particles``) read as read-only mappings."""
 
-    __slots__ = ("_p",)
+    __slots__ = ("_sim",)
 
-    def __init__(self, core_params):
-        object.__setattr__(self, "_p", core_params)
+    def __init__(self, core_sim):
+        object.__setattr__(self, "_sim", core_sim)
 
     def __getattr__(self, name):
-        value = getattr(self._p, name)
+        value = getattr(self._sim.params, name)
         if callable(value):  # the core struct's setters: not part of a read-only view
             raise AttributeError(f"Simulation.params has no {name!r}; change the motion's parameters "
                                  "with sim.set_dynamics(...)")
-        return value
+        return MappingProxyType(value) if isinstance(value, dict) else value
 
     def __setattr__(self, name, value):
         raise AttributeError(f"Simulation.params is read-only ({name!r}): pass model parameters to "
                              "Simulation(...), or change the motion's with sim.set_dynamics(...)")
 
     def __dir__(self):
-        return [n for n in dir(self._p) if not n.startswith("_") and not callable(getattr(self._p, n))]
+        p = self._sim.params
+        return [n for n in dir(p) if not n.startswith("_") and not callable(getattr(p, n))]
 
     def __repr__(self):
-        return f"ParamsView(cells={self._p.cells}, front={self._p.front!r}, dynamics={self._p.dynamics})"
+        p = self._sim.params
+        return f"ParamsView(cells={p.cells}, front={p.front!r}, dynamics={p.dynamics})"
 
 
 class _Serialised:

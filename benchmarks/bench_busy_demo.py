@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
 """240 frames of the A4 demo sheet on 1 thread and on all cores, with every core loaded.
 
-    python scripts/bench_busy_demo.py            # busy: one spinning process per core
-    python scripts/bench_busy_demo.py --quiet    # the machine as it is
+    python -m benchmarks.bench_busy_demo            # busy: one spinning process per core
+    python -m benchmarks.bench_busy_demo --quiet    # the machine as it is
 
 Issue #10's measurement of the OpenMP core (4.14 s on the default count against 0.18 s on one
 thread with every core busy); docs/threads.md quotes it for the core's own pool. Prints the
@@ -16,8 +16,9 @@ import os
 import time
 
 import thinburn
-from thinburn._bench_threads import loaded_cores
 from thinburn.scenes import rect_sheet
+
+from .threads import loaded_cores
 
 
 def run(threads, frames=240) -> float:

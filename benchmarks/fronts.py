@@ -1,4 +1,4 @@
-"""The fronts' speed-accuracy parts of ``python -m thinburn.bench`` (see docs/bench.md).
+"""The fronts' speed-accuracy parts of ``python -m benchmarks`` (see docs/bench.md).
 
 Cases where no method is exact by construction:
 
@@ -21,7 +21,7 @@ import time
 
 import numpy as np
 
-from ._bench_perf import _pyplot, loglog_slope, save_figure
+from .perf import _pyplot, loglog_slope, save_figure
 
 # The flat case shared by both fronts: v = V0 (1 + A x) on the unit square.
 GRADIENT_A = 2.0
@@ -53,7 +53,7 @@ def surface_shapes():
     mid-height. sphere: unit icosphere (level 5), lit at a vertex. cone: base radius 0.2,
     height 0.3, the apex's quarter of the slant cut away, lit at 0.6 of the slant.
     sheet_gradient: the grid front's flat case (unit square, v = 1 + 2x)."""
-    from . import _surface_shapes as S
+    from thinburn import _surface_shapes as S
     cyl_src = np.array([0.1, 0.0, 0.15])
     cone_src = np.array([0.2 * 0.6, 0.0, 0.3 * 0.6])
     sheet_src = np.array([GRADIENT_SOURCE[0], GRADIENT_SOURCE[1], 0.0])
@@ -78,7 +78,7 @@ SURFACE_SHAPES = ("cylinder", "sphere", "cone", "sheet_gradient")
 def surface_solve(cells, source, speed, repeat):
     """Arrival times and the best of `repeat` timings of ignite + advance to +inf (a fresh
     SurfaceFront each time, built and given its speeds outside the timer, as the grid's)."""
-    from .surface_front import SurfaceFront
+    from thinburn.surface_front import SurfaceFront
     best, t = math.inf, None
     for _ in range(repeat):
         front = SurfaceFront(cells, speed=speed)
@@ -95,7 +95,7 @@ def bench_surface_front(sizes, repeat, log, shapes=SURFACE_SHAPES):
     error (max relative, over cells > 3 spacings from the source), mean_error, max_abs,
     seconds (ignite + advance, best of `repeat`), us_per_cell, build_seconds, spacing; for
     sheet_gradient also error_beyond_8h (scored as the grid front is, >= 8 spacings)."""
-    from .surface_front import SurfaceCells
+    from thinburn.surface_front import SurfaceCells
     table = surface_shapes()
     rows = []
     for name in shapes:

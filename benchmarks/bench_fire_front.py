@@ -1,6 +1,6 @@
 """Fire front: error against closed forms versus seconds, per method and grid size.
 
-    python scripts/bench_fire_front.py [--big] [--repeat 3] [--out bench_fire_front.json]
+    python -m benchmarks.bench_fire_front [--big] [--repeat 3] [--out bench_fire_front.json]
 
 Cases (all with closed-form arrival times):
   point    unit speed, source at the centre; relative error over cells >= 8 cells away.
@@ -19,9 +19,9 @@ import json
 import os
 import platform
 
-from thinburn.bench import front_case as case
-from thinburn.bench import front_score as score
-from thinburn.bench import front_solve as solve
+from .bench import front_case as case
+from .bench import front_score as score
+from .bench import front_solve as solve
 
 METHODS = ("cellular", "cellular16", "fmm1", "fmm")
 VARIANTS = {

@@ -1,6 +1,6 @@
 """Speed against accuracy of every part's methods, and whole-frame performance, in one run.
 
-    python -m thinburn.bench [--quick] [--repeat N] [--threads T] [--parts P ...] --out DIR
+    python -m benchmarks [--quick] [--repeat N] [--threads T] [--parts P ...] --out DIR
 
 Parts (in this order; all by default):
   fire_front   every FRONT_METHODS method from a point source in the speed v = 1 + 2x on the
@@ -18,7 +18,7 @@ Parts (in this order; all by default):
                curtain in its wind) at dt = 1/24, 1/48, 1/96 (and 1/192) s with the implicit,
                bdf2 and symplectic integrators: RMS vertex error after 20 s (--quick: 5 s, two
                scenes) against a backward-Euler run at 1/480 s (--quick: 1/240), over the
-               reference's RMS motion, against seconds per run (thinburn/_bench_motion.py).
+               reference's RMS motion, against seconds per run (benchmarks/motion.py).
   heat         thinburn.heat.kernel_sum direct vs fast (tolerance 0.01) on a random cloud;
                error = max relative error against the direct sum (direct: 0).
   ffd          FfdLattice.deform throughput, trilinear and B-spline, n = 1e3 .. 1e6 points
@@ -57,13 +57,14 @@ import time
 
 import numpy as np
 
-from . import _bench_fronts as fronts
-from . import _bench_motion as motion
-from . import _bench_perf as perf
-from . import _bench_threads
-from . import _core
-from ._threads import hardware_threads, set_threads
-from .fire_front import FRONT_METHODS, method_enum
+from thinburn import _core
+from thinburn._threads import hardware_threads, set_threads
+from thinburn.fire_front import FRONT_METHODS, method_enum
+
+from . import fronts
+from . import motion
+from . import perf
+from . import threads as threads_part  # "threads" names the thread count below
 
 # ---------------------------------------------------------------- fire front
 
@@ -149,7 +150,7 @@ INTEGRATORS = ("explicit", "symplectic", "implicit")
 def oscillator(integrator, k_thickness=1.0, c_damping=3.0, mass=10.0, u0=(1e-6, 2e-6, -3e-6)):
     """A 2 x 2 lattice with every vertex pinned but vertex 1, displaced by u0 from rest, no
     gravity: a linear 3-dof oscillator u'' = -K u - c u'. Returns (lattice, dynamics, K)."""
-    from .lattice import flat_rest
+    from thinburn.lattice import flat_rest
     lat = _core.FfdLattice(2, flat_rest(2, 1.0, 1.0, 0.3))
     dyn = _core.LatticeDynamics(lat, integrator=integrator, substeps=1, sleeping=False,
                                 cg_velocity_tolerance=0.0, c_damping=c_damping,
@@ -249,7 +250,7 @@ def bench_integrators(steps_list, stiffnesses, repeat, log):
 
 
 def bench_heat(counts, repeat, log, n_targets=2048, tolerance=0.01):
-    from .heat import kernel_sum
+    from thinburn.heat import kernel_sum
     rng = np.random.default_rng(0)
     tgt = rng.uniform(-0.5, 0.5, size=(n_targets, 3))
     rows = []
@@ -397,7 +398,7 @@ FIGURES = (  # file, plotting function, the row parts it draws
     ("motion.png", motion.plot_motion, ("motion",)),
     ("performance.png", perf.plot_performance, ("ffd", "frames")),
     ("scaling.png", perf.plot_scaling, ("scaling", "active")),
-    ("threads.png", _bench_threads.plot_threads, ("threads",)),
+    ("threads.png", threads_part.plot_threads, ("threads",)),
 )
 
 
@@ -427,14 +428,14 @@ def run_perf_parts(parts, quick, repeat, threads, log):
             rows += perf.bench_active(sizes, ["shell_auto_lattice"], 6, 24, 1, threads, log)
         rows += perf.bench_ignite([128] + sizes, repeat, log)
     if "threads" in parts:
-        rows += _bench_threads.bench_threads(24 if quick else 48, 48, frame_repeat, log,
-                                             _bench_threads.SCENES[:1] if quick else _bench_threads.SCENES)
+        rows += threads_part.bench_threads(24 if quick else 48, 48, frame_repeat, log,
+                                             threads_part.SCENES[:1] if quick else threads_part.SCENES)
     set_threads(threads)
     return rows
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m thinburn.bench",
+    ap = argparse.ArgumentParser(prog="python -m benchmarks",
                                  description=__doc__.splitlines()[0])
     ap.add_argument("--out", required=True, help="directory for results.json and the figures")
     ap.add_argument("--quick", action="store_true", help="small sizes only (about a minute)")

@@ -2,10 +2,10 @@
 motion, FFD of the mesh) for each preset's demo scene, with the shell off and on. Prints a
 table and saves JSON. Not a test: timings depend on the machine and its load.
 
-The frame loop is thinburn.bench's (python -m thinburn.bench --parts frames runs the same
+The frame loop is benchmarks.bench's (python -m benchmarks --parts frames runs the same
 measurement at 128² cells for the demo meshes and 16k-vertex meshes; docs/bench.md).
 
-    python scripts/bench_frame.py [--cells 128] [--seconds 20] [--threads 1] [--out bench_frame.json]
+    python -m benchmarks.bench_frame [--cells 128] [--seconds 20] [--threads 1] [--out bench_frame.json]
 """
 from __future__ import annotations
 
@@ -13,8 +13,9 @@ import argparse
 import json
 
 import thinburn
-from thinburn._bench_perf import PAPER_REFERENCE, best_frames, frame_summary
 from thinburn.demo import build, default_scene
+
+from .perf import PAPER_REFERENCE, best_frames, frame_summary
 
 
 def make_sim(material: str, cells: int, threads: int, shell: bool):

@@ -1,4 +1,4 @@
-"""The threads part of ``python -m thinburn.bench``: does a second thread ever hurt?
+"""The threads part of ``python -m benchmarks``: does a second thread ever hurt?
 
 Every preset's demo scene at 128² cells with a ~16k-vertex mesh, and two larger sheets (paper:
 512² cells with ~100k vertices, 128² with ~400k), are timed on 1 thread and on all logical
@@ -16,10 +16,11 @@ import os
 
 import numpy as np
 
-from ._bench_perf import _pyplot, frame_summary, interleaved_best_frames, save_figure
-from ._threads import hardware_threads
-from .demo import build, default_scene
-from .materials import MATERIALS
+from thinburn._threads import hardware_threads
+from thinburn.demo import build, default_scene
+from thinburn.materials import MATERIALS
+
+from .perf import _pyplot, frame_summary, interleaved_best_frames, save_figure
 
 GOAL_BUSY_RATIO = 1.10
 SCENES = tuple((m, 128, 16000) for m in MATERIALS) + (("paper", 512, 100000), ("paper", 128, 400000))

@@ -1,4 +1,4 @@
-"""The performance parts of ``python -m thinburn.bench`` (see docs/bench.md).
+"""The performance parts of ``python -m benchmarks`` (see docs/bench.md).
 
   ffd      FfdLattice.deform throughput (vertices/s) against a memory-bandwidth bound measured
            in the same run (STREAM triad, thinburn._threads.measure_memory_bandwidth).
@@ -21,13 +21,13 @@ import time
 
 import numpy as np
 
-from . import _core
-from ._threads import measure_memory_bandwidth
-from .demo import build, default_scene
-from .lattice import flat_rest
-from .materials import MATERIALS
-from .scenes import rect_sheet
-from .simulation import Simulation
+from thinburn import _core
+from thinburn._threads import measure_memory_bandwidth
+from thinburn.demo import build, default_scene
+from thinburn.lattice import flat_rest
+from thinburn.materials import MATERIALS
+from thinburn.scenes import rect_sheet
+from thinburn.simulation import Simulation
 
 FRAME_DT = 1.0 / 24.0
 STAT_KEYS = ("front_active", "burning", "fringe", "awake", "particles", "cg_iterations")
@@ -233,8 +233,8 @@ def shell_scenes(target=16000):
     """Curved shells with about `target` vertices (issue #11): a lantern standing on a table
     lit on its side, a sphere pinned at its top lit on its equator, an A4 letter folded at 30
     degrees on a table lit at a corner. (name, vertices, faces, ignite at, Simulation keywords)."""
-    from . import _surface_shapes as shapes
-    from .scenes import rect_sheet
+    from thinburn import _surface_shapes as shapes
+    from thinburn.scenes import rect_sheet
 
     nz = max(4, int(round(np.sqrt(target / 3.0))))
     lantern = shapes.cylinder(0.1, 0.3, nt=3 * nz, nz=nz - 1)

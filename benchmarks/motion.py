@@ -1,4 +1,4 @@
-"""The motion part of ``python -m thinburn.bench``: how far the demo scenes' motion at a step dt is
+"""The motion part of ``python -m benchmarks``: how far the demo scenes' motion at a step dt is
 from a fine-step reference, against what the run cost (issue #12: the motion's row of speed
 against accuracy).
 
@@ -13,8 +13,9 @@ import time
 
 import numpy as np
 
-from ._bench_perf import _pyplot, save_figure
-from .demo import build, default_scene
+from thinburn.demo import build, default_scene
+
+from .perf import _pyplot, save_figure
 
 MOTION_INTEGRATORS = ("implicit", "bdf2", "symplectic")
 # (label, preset, wind along +x in m/s or None for the scene's own)

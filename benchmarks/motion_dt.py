@@ -1,13 +1,13 @@
-"""How the demo scenes' motion depends on dt (issue #12, item 3), as a table: `python
-scripts/motion_dt.py [--time 20]` prints the bench's motion part (thinburn/_bench_motion.py)
+"""How the demo scenes' motion depends on dt (issue #12, item 3), as a table: `python -m
+benchmarks.motion_dt [--time 20]` prints the bench's motion part (benchmarks/motion.py)
 one line per scene: the RMS distance of the mesh's vertices from a dt = 1/480 s backward-Euler
 run after --time seconds, over that run's RMS displacement from rest, and each run's wall time.
-`python -m thinburn.bench --parts motion --out DIR` charts the same rows (DIR/motion.png)."""
+`python -m benchmarks --parts motion --out DIR` charts the same rows (DIR/motion.png)."""
 from __future__ import annotations
 
 import argparse
 
-from thinburn import _bench_motion as motion
+from . import motion
 
 
 def main(argv=None):
