@@ -1,17 +1,17 @@
 """How far frame-sized steps are from a fine-step run once the lattice bends softly
 (docs/materials.md, "Why paper keeps its lattice's bending"; docs/dynamics.md §1.1).
 
-    python scripts/soft_bending_dt.py paper     # the A4 demo, B and wind varied
-    python scripts/soft_bending_dt.py fabrics   # cloth, silk, curtain at their presets' B
+    python -m benchmarks.soft_bending_dt paper     # the A4 demo, B and wind varied
+    python -m benchmarks.soft_bending_dt fabrics   # cloth, silk, curtain at their presets B
 
-Each run is the motion bench's (thinburn/_bench_motion.py: 64 cells, one thread, 20 s); the
+Each run is the motion bench's (benchmarks/motion.py: 64 cells, one thread, 20 s); the
 error is the RMS vertex distance from a 1/480 s backward-Euler run over that run's RMS motion.
 """
 import sys
 
 import numpy as np
 
-import thinburn._bench_motion as bm
+from benchmarks import motion as bm
 
 PAPER = ((None, 3.0), (1e-3, 1.0), (1e-3, 3.0), (3e-4, 3.0), (6e-5, 2.0))
 
