@@ -115,17 +115,24 @@ def test_negative_rotation_turns_toward_the_bottom_and_gain_scales():
 
 # --- derivatives ---------------------------------------------------------------------------------
 
-def perturbed(seed=0, M=3):
+# With flexural_rigidity below the lattice's own (0.045 N m here), membrane springs join the
+# layers (cpp/membrane.*, tests/test_membrane.py): the same derivatives hold.
+SOFT = [{}, dict(flexural_rigidity=2e-6)]
+
+
+def perturbed(seed=0, M=3, **params):
     lat, dyn = make(M, 0.05, 0.01, gravity=[0, 0, 0], k_structure=0.3, k_shear=0.2, k_flex=0.1,
-                    k_thickness=0.7, k_transverse=0.4)
+                    k_thickness=0.7, k_transverse=0.4, **params)
     rng = np.random.default_rng(seed)
     x = lat.rest + rng.normal(scale=0.01, size=lat.rest.shape)
     dyn.set_state(x, np.zeros_like(x))
     return lat, dyn, x
 
 
-def test_spring_forces_are_minus_the_energy_gradient():
-    lat, dyn, x = perturbed()
+@pytest.mark.parametrize("soft", SOFT)
+def test_spring_forces_are_minus_the_energy_gradient(soft):
+    lat, dyn, x = perturbed(**soft)
+    assert (dyn.membrane_springs > 0) == bool(soft)
     f = dyn.forces()
     assert np.abs(f).max() > 1.0
     eps = 1e-7
@@ -144,11 +151,12 @@ def test_spring_forces_are_minus_the_energy_gradient():
     lengths = np.linalg.norm(x[dyn.spring_pairs[:, 1]] - x[dyn.spring_pairs[:, 0]], axis=1)
     stretch = lengths - np.asarray(dyn.rest_lengths)
     assert (stretch > 0).any() and (stretch < 0).any()  # both regimes are exercised
-    assert set(np.unique(kinds)) == {0, 1, 2, 3, 4} - ({2} if lat.M < 3 else set())
+    assert set(np.unique(kinds)) == {0, 1, 2, 3, 4} - ({2} if lat.M < 3 else set()) | ({5} if soft else set())
 
 
-def test_stiffness_matrix_is_the_jacobian_of_the_forces():
-    lat, dyn, x = perturbed(1)
+@pytest.mark.parametrize("soft", SOFT)
+def test_stiffness_matrix_is_the_jacobian_of_the_forces(soft):
+    lat, dyn, x = perturbed(1, **soft)
     K = dyn.stiffness_matrix()
     assert np.abs(K).max() > 1.0
     np.testing.assert_allclose(K, K.T, rtol=0, atol=1e-9)

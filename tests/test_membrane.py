@@ -46,29 +46,8 @@ def test_own_rigidity_is_the_closed_form_and_share_follows_it():
     assert stiff.bending_share == 1.0 and stiff.membrane_springs == 0
 
 
-def test_forces_are_the_energy_gradient_and_the_jacobian_is_exact():
-    # Measured: |f + grad E| 5.8e-5 of max |f| (the central difference's own error at eps
-    # 1e-7, the same as without membrane springs), |K - K_fd| 3e-10 of max |K|.
-    lat, dyn = make(flexural_rigidity=1e-5)
-    rng = np.random.default_rng(0)
-    x = lat.rest + rng.normal(0, 0.002, lat.rest.shape)
-    dyn.set_state(x, np.zeros_like(x))
-    f, K = dyn.forces(), dyn.stiffness_matrix()
-    np.testing.assert_allclose(K, K.T, rtol=0, atol=0)
-    eps = 1e-7
-    grad, Kfd = np.zeros_like(x), np.zeros_like(K)
-    for v in range(x.shape[0]):
-        for d in range(3):
-            xp, xm = x.copy(), x.copy()
-            xp[v, d] += eps
-            xm[v, d] -= eps
-            dyn.set_state(xp, np.zeros_like(x))
-            ep, fp = dyn.energy(), dyn.forces().ravel()
-            dyn.set_state(xm, np.zeros_like(x))
-            grad[v, d] = (ep - dyn.energy()) / (2 * eps)
-            Kfd[:, 3 * v + d] = (fp - dyn.forces().ravel()) / (2 * eps)
-    np.testing.assert_allclose(f, -grad, rtol=0, atol=2e-4 * np.abs(f).max())
-    np.testing.assert_allclose(K, Kfd, rtol=0, atol=2e-9 * np.abs(K).max())
+# Forces against the energy's gradient and the Jacobian against the forces' finite differences,
+# with membrane springs: tests/test_dynamics.py (its SOFT cases).
 
 
 def test_stretch_is_kept_and_bending_is_scaled_by_the_share():
