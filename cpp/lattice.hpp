@@ -10,6 +10,7 @@
 
 #include <cstdint>
 #include <limits>
+#include <mutex>
 #include <vector>
 
 namespace thinburn {
@@ -32,6 +33,46 @@ struct Embedding {
   RowMatX3 rest;                  ///< n x 3: rest positions of the points
   /// @brief Number of embedded points.
   Eigen::Index size() const { return r.size(); }
+};
+
+class FfdLattice;
+
+/// @brief The deformed positions of one embedding, kept from call to call. A call redoes only
+/// the points one of whose couples moved since the last call (bitwise: a sleeping couple keeps
+/// its points as they were), with FfdLattice::deform's kernel on the same displacement table,
+/// so the positions are bit-identical to a full deform. The points are grouped by stencil (all
+/// the points of a control cell read the same couples), so a moving region redoes its own
+/// points only. One update at a time (a mutex): the Simulation's const vertex_positions may be
+/// called from several threads.
+class CachedDeform {
+ public:
+  CachedDeform() = default;
+  /// @brief For points embedded in a lattice of `couples` couples (the embedding is not kept:
+  /// each call takes it again, and it must be the same one).
+  CachedDeform(const Embedding& e, int couples);
+  /// @brief Brings the positions up to date with the lattice's control positions now and copies
+  /// them into out (n x 3); z_min as FfdLattice::deform (a change redoes every point).
+  void deform_into(const FfdLattice& lattice, const Embedding& e, double z_min, Eigen::Ref<RowMatX3> out);
+  /// @brief Points the last call redid (all of them on the first call).
+  long points_redone() const { return redone_; }
+  /// @brief Groups of points that share a stencil.
+  long groups() const { return static_cast<long>(group_offset_.size()) - 1; }
+
+ private:
+  void refresh(const FfdLattice& lattice, const Embedding& e, double z_min);
+  Eigen::Index points_ = 0;
+  int stencil_ = 0;
+  std::vector<int> group_offset_;            // group g: group_points_[group_offset_[g] .. [g + 1])
+  std::vector<std::int32_t> group_points_;   // point indices, grouped
+  std::vector<int> group_couples_;           // per group its stencil's couples
+  std::vector<double> table_;                // the displacement table positions_ follow
+  std::vector<std::uint8_t> moved_;          // per couple, scratch
+  std::vector<long> dirty_;                  // groups to redo, scratch
+  RowMatX3 positions_;
+  double z_min_ = 0.0;
+  bool valid_ = false;
+  long redone_ = 0;
+  std::mutex mutex_;
 };
 
 /// @brief Which control vertices are joined by springs, and which couples are neighbours.
@@ -83,6 +124,10 @@ class FfdLattice {
   /// lattice (out is then partly written).
   void deform(const Embedding& e, Eigen::Ref<RowMatX3> out,
               double z_min = -std::numeric_limits<double>::infinity()) const;
+
+  /// @brief The per-couple displacement table deform reads: 8 doubles per couple, bottom
+  /// (x, y, z, 0) then top (x, y, z, 0), current minus rest.
+  void displacement_table(std::vector<double>& table) const;
 
   /// @brief Spread per-point values onto the control vertices with the embedding's weights
   /// (the transpose of the interpolation): sum over points of weight * value. Serial, fixed order.

@@ -1,0 +1,112 @@
+"""Benchmark: film scale (issue #11, item 4). A flat 1 m paper sheet with N² cells (512²) and an
+n × n vertex mesh (1000 × 1000 = 1M vertices), lit at a corner, frames/s on 1 and 2 threads
+with a per-phase profile of the frame. Not a test: timings depend on the machine and its load
+(the load average is printed and saved with every number).
+
+A frame is sim.step(1/24) then sim.vertex_positions(), as in python -m thinburn.bench; each
+frame keeps its fastest time over --repeat runs on fresh simulations (the simulation is
+deterministic: frame k does the same work in every run), the thread counts taken in turn.
+
+    python scripts/bench_film.py [--cells 512] [--side 1000] [--frames 96] [--warmup 24]
+                                 [--threads 1 2] [--repeat 2] [--out film.json]
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import time
+
+import numpy as np
+
+import thinburn
+from thinburn._bench_perf import frame_summary, interleaved_best_frames
+from thinburn.scenes import rect_sheet
+
+SHEET = 1.0  # m, the sheet's side
+
+
+def film_mesh(side: int):
+    """The film sheet: a side × side vertex grid over a SHEET-metre square (2 (side-1)² faces)."""
+    return rect_sheet(SHEET, SHEET, nx=side, ny=side)
+
+
+def make_sim(verts, faces, cells: int, threads: int, reuse: bool = False):
+    sim = thinburn.Simulation(verts, faces, material="paper", cells=cells, threads=threads,
+                              floor=0.0)  # on a table, as the demo sheets
+    sim.ignite((0.0, 0.0, 0.0), time=0.0, radius=0.02)  # a corner
+    return ReusedOutput(sim) if reuse else sim
+
+
+class ReusedOutput:
+    """A Simulation whose vertex_positions() writes into one array kept from frame to frame
+    (vertex_positions(out=...)): what a renderer or an exporter that copies each frame on
+    does. A fresh (n, 3) array per frame costs its page faults (see docs/bench.md)."""
+
+    def __init__(self, sim):
+        self.sim = sim
+        self.out = np.empty((sim.n_vertices, 3))
+
+    def vertex_positions(self):
+        return self.sim.vertex_positions(out=self.out)
+
+    def __getattr__(self, name):
+        return getattr(self.sim, name)
+
+
+def profile(sim, frames: int, dt: float = 1 / 24) -> dict:
+    """Mean ms per frame of each phase (Simulation.phase_seconds), over `frames` more frames."""
+    sim.step(dt)
+    before = sim.phase_seconds()
+    t0 = time.perf_counter()
+    for _ in range(frames):
+        sim.step(dt)
+        sim.vertex_positions()
+    wall = time.perf_counter() - t0
+    after = sim.phase_seconds()
+    out = {k: 1e3 * (after[k] - before[k]) / frames for k in after}
+    out["frame (wall)"] = 1e3 * wall / frames
+    return out
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--cells", type=int, default=512)
+    ap.add_argument("--side", type=int, default=1000, help="mesh vertices per side")
+    ap.add_argument("--frames", type=int, default=96, help="frames timed")
+    ap.add_argument("--warmup", type=int, default=24, help="frames stepped before the timing")
+    ap.add_argument("--threads", type=int, nargs="+", default=[1, 2])
+    ap.add_argument("--repeat", type=int, default=2)
+    ap.add_argument("--profile-frames", type=int, default=24)
+    ap.add_argument("--out", default="film.json")
+    args = ap.parse_args()
+    verts, faces = film_mesh(args.side)
+    t0 = time.perf_counter()
+    probe = make_sim(verts, faces, args.cells, args.threads[0])
+    build_s = time.perf_counter() - t0
+    print(f"film: {len(verts)} vertices, {probe.num_cells} cells, lattice {probe.lattice_size}, "
+          f"build {build_s:.1f} s", flush=True)
+    del probe
+    load0 = os.getloadavg()
+    makers = {t: (lambda t=t: make_sim(verts, faces, args.cells, t)) for t in args.threads}
+    best = interleaved_best_frames(makers, args.frames, args.warmup, args.repeat)
+    load1 = os.getloadavg()
+    rows = []
+    for t, (step_ms, pos_ms, stats, sim) in best.items():
+        r = dict(threads=t, cells=args.cells, vertices=len(verts), lattice=sim.lattice_size,
+                 load_before=load0, load_after=load1, build_seconds=build_s,
+                 **frame_summary(step_ms, pos_ms, stats))
+        r["profile_ms"] = profile(sim, args.profile_frames) if hasattr(sim, "phase_seconds") else {}
+        rows.append(r)
+        print(f"threads={t}  {r['frames_per_second']:6.1f} frames/s  {r['ms_per_frame']:7.2f} ms/frame "
+              f"(vertex_positions {r['positions_ms']:.2f} ms)  awake={r['awake']:.0f} "
+              f"burning={r['burning']:.0f} cg={r['cg_iterations']:.0f}  "
+              f"load {load0[0]:.2f} -> {load1[0]:.2f}", flush=True)
+        print("    " + "  ".join(f"{k} {v:.2f}" for k, v in r["profile_ms"].items()), flush=True)
+    with open(args.out, "w") as f:
+        json.dump(rows, f, indent=2)
+    print(f"saved {args.out}")
+
+
+if __name__ == "__main__":
+    main()
