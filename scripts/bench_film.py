@@ -7,8 +7,11 @@ A frame is sim.step(1/24) then sim.vertex_positions(), as in python -m thinburn.
 frame keeps its fastest time over --repeat runs on fresh simulations (the simulation is
 deterministic: frame k does the same work in every run), the thread counts taken in turn.
 
-    python scripts/bench_film.py [--cells 512] [--side 1000] [--frames 96] [--warmup 24]
-                                 [--threads 1 2] [--repeat 2] [--out film.json]
+    python scripts/bench_film.py [--cells 512] [--side 1000] [--frames 48] [--start 1 60]
+                                 [--threads 1 2] [--repeat 2] [--reuse-output] [--out film.json]
+
+Each --start is a window: that many simulated seconds are stepped untimed first (the fire
+then covers a 1 cm disc at 1 s, a 20 cm quarter-disc at 60 s).
 """
 from __future__ import annotations
 
@@ -69,15 +72,42 @@ def profile(sim, frames: int, dt: float = 1 / 24) -> dict:
     return out
 
 
+def measure(verts, faces, args, start: float, log) -> list:
+    """Rows for one window: `args.frames` frames timed after `start` simulated seconds."""
+    warmup = max(1, round(start * 24))
+    makers = {t: (lambda t=t: make_sim(verts, faces, args.cells, t, args.reuse_output)) for t in args.threads}
+    load0 = os.getloadavg()
+    best = interleaved_best_frames(makers, args.frames, warmup, args.repeat)
+    load1 = os.getloadavg()
+    rows = []
+    for t, (step_ms, pos_ms, stats, sim) in best.items():
+        r = dict(threads=t, start_seconds=start, cells=args.cells, vertices=len(verts),
+                 lattice=sim.lattice_size, reuse_output=args.reuse_output, load_before=load0,
+                 load_after=load1, **frame_summary(step_ms, pos_ms, stats))
+        r["profile_ms"] = profile(sim, args.profile_frames) if hasattr(sim, "phase_seconds") else {}
+        r["mesh_points_redone"] = getattr(sim, "mesh_points_redone", None)
+        rows.append(r)
+        log(f"start={start:5.1f} s threads={t}  {r['frames_per_second']:6.1f} frames/s  "
+            f"{r['ms_per_frame']:7.2f} ms/frame (vertex_positions {r['positions_ms']:.2f} ms)  "
+            f"awake={r['awake']:.0f} burning={r['burning']:.0f} cg={r['cg_iterations']:.0f}  "
+            f"load {load0[0]:.2f} -> {load1[0]:.2f}")
+        log("    " + "  ".join(f"{k} {v:.2f}" for k, v in r["profile_ms"].items())
+            + f"  (mesh vertices redone {r['mesh_points_redone']})")
+    return rows
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--cells", type=int, default=512)
     ap.add_argument("--side", type=int, default=1000, help="mesh vertices per side")
-    ap.add_argument("--frames", type=int, default=96, help="frames timed")
-    ap.add_argument("--warmup", type=int, default=24, help="frames stepped before the timing")
+    ap.add_argument("--frames", type=int, default=48, help="frames timed per window")
+    ap.add_argument("--start", type=float, nargs="+", default=[1.0, 60.0],
+                    help="simulated seconds stepped (untimed) before each window")
     ap.add_argument("--threads", type=int, nargs="+", default=[1, 2])
     ap.add_argument("--repeat", type=int, default=2)
     ap.add_argument("--profile-frames", type=int, default=24)
+    ap.add_argument("--reuse-output", action="store_true",
+                    help="vertex_positions(out=...) into one array kept across frames")
     ap.add_argument("--out", default="film.json")
     args = ap.parse_args()
     verts, faces = film_mesh(args.side)
@@ -85,26 +115,13 @@ def main() -> None:
     probe = make_sim(verts, faces, args.cells, args.threads[0])
     build_s = time.perf_counter() - t0
     print(f"film: {len(verts)} vertices, {probe.num_cells} cells, lattice {probe.lattice_size}, "
-          f"build {build_s:.1f} s", flush=True)
+          f"build {build_s:.1f} s, thinburn at {thinburn.__file__}", flush=True)
     del probe
-    load0 = os.getloadavg()
-    makers = {t: (lambda t=t: make_sim(verts, faces, args.cells, t)) for t in args.threads}
-    best = interleaved_best_frames(makers, args.frames, args.warmup, args.repeat)
-    load1 = os.getloadavg()
     rows = []
-    for t, (step_ms, pos_ms, stats, sim) in best.items():
-        r = dict(threads=t, cells=args.cells, vertices=len(verts), lattice=sim.lattice_size,
-                 load_before=load0, load_after=load1, build_seconds=build_s,
-                 **frame_summary(step_ms, pos_ms, stats))
-        r["profile_ms"] = profile(sim, args.profile_frames) if hasattr(sim, "phase_seconds") else {}
-        rows.append(r)
-        print(f"threads={t}  {r['frames_per_second']:6.1f} frames/s  {r['ms_per_frame']:7.2f} ms/frame "
-              f"(vertex_positions {r['positions_ms']:.2f} ms)  awake={r['awake']:.0f} "
-              f"burning={r['burning']:.0f} cg={r['cg_iterations']:.0f}  "
-              f"load {load0[0]:.2f} -> {load1[0]:.2f}", flush=True)
-        print("    " + "  ".join(f"{k} {v:.2f}" for k, v in r["profile_ms"].items()), flush=True)
+    for start in args.start:
+        rows += measure(verts, faces, args, start, lambda m: print(m, flush=True))
     with open(args.out, "w") as f:
-        json.dump(rows, f, indent=2)
+        json.dump(dict(build_seconds=build_s, argv=vars(args), rows=rows), f, indent=2)
     print(f"saved {args.out}")
 
 
