@@ -290,7 +290,14 @@ void CachedDeform::refresh(const FfdLattice& lattice, const Embedding& e, double
       }
   redone_ = points;
   positions_.resize(points_, 3);
-  if (!dirty_.empty()) {
+  if (2 * points > points_) {
+    // Most of the mesh moved: one pass in the mesh's own order (FfdLattice::deform's blocks)
+    // reads and writes memory in sequence, where the groups' order jumps between rows.
+    Eigen::Ref<RowMatX3> out(positions_);
+    redone_ = points_;
+    if (stencil_ == 4) deform_points<4>(e, table.data(), lattice.couples(), out, z_min);
+    else deform_points<9>(e, table.data(), lattice.couples(), out, z_min);
+  } else if (!dirty_.empty()) {
     Eigen::Ref<RowMatX3> out(positions_);
     const int couples = lattice.couples();
     const double* tab = table.data();  // the caller's: table is thread_local, the helpers' own are empty
