@@ -270,13 +270,54 @@ CachedDeform::CachedDeform(const Embedding& e, int couples) : points_(e.size()),
   stencil_ = e.stencil;
 }
 
-void CachedDeform::refresh(const FfdLattice& lattice, const Embedding& e, double z_min) {
+void CachedDeform::deform_into(const FfdLattice& lattice, const Embedding& e, double z_min, Eigen::Ref<RowMatX3> out) {
+  std::lock_guard<std::mutex> lock(mutex_);
   if (static_cast<int>(moved_.size()) != lattice.couples() || e.size() != points_ || e.stencil != stencil_)
     throw std::invalid_argument("CachedDeform: the embedding or the lattice is not the one it was made for");
+  if (out.rows() != points_)
+    throw std::invalid_argument("out must have " + std::to_string(points_) + " rows, got " + std::to_string(out.rows()));
   if (std::isnan(z_min)) throw std::invalid_argument("z_min must not be NaN");
   thread_local std::vector<double> table;
   lattice.displacement_table(table);
-  const bool all = !valid_ || z_min != z_min_;
+  const long points = moved_points(table, z_min);
+  const int couples = lattice.couples();
+  if (2 * points > points_) {
+    // Most of the mesh moved: straight into out in the mesh's order, as FfdLattice::deform
+    // (no copy; the groups' order jumps between rows). The kept positions go stale.
+    deform_all(e, table.data(), couples, z_min, out);
+    positions_valid_ = false;
+  } else {
+    positions_.resize(points_, 3);
+    Eigen::Ref<RowMatX3> kept(positions_);
+    if (!positions_valid_) {
+      deform_all(e, table.data(), couples, z_min, kept);
+    } else {
+      redone_ = points;
+      const double* tab = table.data();  // the caller's: table is thread_local, the helpers' own are empty
+      const long per_group = std::max<long>(1, points / std::max<long>(1, static_cast<long>(dirty_.size())));
+      parallel_for(0, static_cast<long>(dirty_.size()), per_group * kPointCost, [&](long i) {
+        const long g = dirty_[i];
+        // The couples were checked at construction: the kernel cannot meet one out of range.
+        if (stencil_ == 4) deform_range<4>(e, tab, couples, kept, z_min, group_offset_[g], group_offset_[g + 1], group_points_.data());
+        else deform_range<9>(e, tab, couples, kept, z_min, group_offset_[g], group_offset_[g + 1], group_points_.data());
+      });
+    }
+    positions_valid_ = true;
+    // One memcpy where out's rows are packed (numpy's C order): Eigen's copy into a Ref with a
+    // run-time stride went row by row, 10 % of a film frame.
+    if (out.outerStride() == 3) {
+      std::memcpy(out.data(), positions_.data(), sizeof(double) * 3 * std::size_t(points_));
+    } else {
+      out = positions_;
+    }
+  }
+  table_.swap(table);
+  z_min_ = z_min;
+  table_valid_ = true;
+}
+
+long CachedDeform::moved_points(const std::vector<double>& table, double z_min) {
+  const bool all = !table_valid_ || z_min != z_min_;
   for (std::size_t c = 0; c < moved_.size(); ++c)
     moved_[c] = all || std::memcmp(&table[8 * c], &table_[8 * c], 8 * sizeof(double)) != 0;
   dirty_.clear();
@@ -288,45 +329,13 @@ void CachedDeform::refresh(const FfdLattice& lattice, const Embedding& e, double
         points += group_offset_[g + 1] - group_offset_[g];
         break;
       }
-  redone_ = points;
-  positions_.resize(points_, 3);
-  if (2 * points > points_) {
-    // Most of the mesh moved: one pass in the mesh's own order (FfdLattice::deform's blocks)
-    // reads and writes memory in sequence, where the groups' order jumps between rows.
-    Eigen::Ref<RowMatX3> out(positions_);
-    redone_ = points_;
-    if (stencil_ == 4) deform_points<4>(e, table.data(), lattice.couples(), out, z_min);
-    else deform_points<9>(e, table.data(), lattice.couples(), out, z_min);
-  } else if (!dirty_.empty()) {
-    Eigen::Ref<RowMatX3> out(positions_);
-    const int couples = lattice.couples();
-    const double* tab = table.data();  // the caller's: table is thread_local, the helpers' own are empty
-    const long per_group = std::max<long>(1, points / static_cast<long>(dirty_.size()));
-    parallel_for(0, static_cast<long>(dirty_.size()), per_group * kPointCost, [&](long i) {
-      const long g = dirty_[i];
-      // The couples were checked at construction: the kernel cannot meet one out of range.
-      if (stencil_ == 4) deform_range<4>(e, tab, couples, out, z_min, group_offset_[g], group_offset_[g + 1], group_points_.data());
-      else deform_range<9>(e, tab, couples, out, z_min, group_offset_[g], group_offset_[g + 1], group_points_.data());
-    });
-  }
-  table_.swap(table);
-  z_min_ = z_min;
-  valid_ = true;
+  return points;
 }
 
-void CachedDeform::deform_into(const FfdLattice& lattice, const Embedding& e, double z_min, Eigen::Ref<RowMatX3> out) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  refresh(lattice, e, z_min);
-  if (out.rows() != positions_.rows())
-    throw std::invalid_argument("out must have " + std::to_string(positions_.rows()) + " rows, got " +
-                                std::to_string(out.rows()));
-  // One memcpy where out's rows are packed (numpy's C order): Eigen's copy into a Ref with a
-  // run-time stride went row by row, 10 % of a film frame.
-  if (out.outerStride() == 3) {
-    std::memcpy(out.data(), positions_.data(), sizeof(double) * 3 * std::size_t(positions_.rows()));
-  } else {
-    out = positions_;
-  }
+void CachedDeform::deform_all(const Embedding& e, const double* table, int couples, double z_min, Eigen::Ref<RowMatX3> out) {
+  redone_ = points_;
+  if (stencil_ == 4) deform_points<4>(e, table, couples, out, z_min);
+  else deform_points<9>(e, table, couples, out, z_min);
 }
 
 Eigen::VectorXd FfdLattice::scatter(const Embedding& e, const Eigen::VectorXd& values) const {

@@ -42,35 +42,37 @@ class FfdLattice;
 /// its points as they were), with FfdLattice::deform's kernel on the same displacement table,
 /// so the positions are bit-identical to a full deform. The points are grouped by stencil (all
 /// the points of a control cell read the same couples), so a moving region redoes its own
-/// points only. One update at a time (a mutex): the Simulation's const vertex_positions may be
-/// called from several threads.
+/// points only. When more than half of them moved, a call deforms every point straight into
+/// the caller's rows, as FfdLattice::deform (no copy), and the next call with fewer moved
+/// deforms every point once more to keep them. One call at a time (a mutex).
 class CachedDeform {
  public:
   CachedDeform() = default;
   /// @brief For points embedded in a lattice of `couples` couples (the embedding is not kept:
   /// each call takes it again, and it must be the same one).
   CachedDeform(const Embedding& e, int couples);
-  /// @brief Brings the positions up to date with the lattice's control positions now and copies
-  /// them into out (n x 3); z_min as FfdLattice::deform (a change redoes every point).
+  /// @brief The points deformed by the lattice's control positions now, into out (n x 3);
+  /// z_min as FfdLattice::deform (a change redoes every point).
   void deform_into(const FfdLattice& lattice, const Embedding& e, double z_min, Eigen::Ref<RowMatX3> out);
-  /// @brief Points the last call redid (all of them on the first call).
+  /// @brief Points the last call computed (the others were copied from the call before).
   long points_redone() const { return redone_; }
   /// @brief Groups of points that share a stencil.
   long groups() const { return static_cast<long>(group_offset_.size()) - 1; }
 
  private:
-  void refresh(const FfdLattice& lattice, const Embedding& e, double z_min);
+  long moved_points(const std::vector<double>& table, double z_min);  // fills moved_, dirty_
+  void deform_all(const Embedding& e, const double* table, int couples, double z_min, Eigen::Ref<RowMatX3> out);
   Eigen::Index points_ = 0;
   int stencil_ = 0;
   std::vector<int> group_offset_;            // group g: group_points_[group_offset_[g] .. [g + 1])
   std::vector<std::int32_t> group_points_;   // point indices, grouped
   std::vector<int> group_couples_;           // per group its stencil's couples
-  std::vector<double> table_;                // the displacement table positions_ follow
+  std::vector<double> table_;                // the displacement table of the last call
   std::vector<std::uint8_t> moved_;          // per couple, scratch
   std::vector<long> dirty_;                  // groups to redo, scratch
-  RowMatX3 positions_;
+  RowMatX3 positions_;                       // the points as of table_ (when positions_valid_)
   double z_min_ = 0.0;
-  bool valid_ = false;
+  bool table_valid_ = false, positions_valid_ = false;
   long redone_ = 0;
   std::mutex mutex_;
 };

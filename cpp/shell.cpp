@@ -415,6 +415,7 @@ void Shell::set_dynamics_params(const DynamicsParams& p) {
 }
 
 void Shell::vertex_positions(RowMatX3& out) const {
+  std::lock_guard<std::mutex> lock(mesh_mutex_);
   PhaseTimer timer(times_, Phase::Mesh);
   const double z_min = params_.has_floor ? params_.floor_z : -std::numeric_limits<double>::infinity();
   if (control_) return control_->deform(surface_vertices_, lattice_->positions(), out, z_min);
@@ -432,6 +433,7 @@ void Shell::vertex_positions_into(Eigen::Ref<RowMatX3> out) const {
     out = tmp;
     return;
   }
+  std::lock_guard<std::mutex> lock(mesh_mutex_);
   PhaseTimer timer(times_, Phase::Mesh);
   const double z_min = params_.has_floor ? params_.floor_z : -std::numeric_limits<double>::infinity();
   mesh_deform_->deform_into(*lattice_, vertex_embedding_, z_min, out);

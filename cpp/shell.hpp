@@ -10,6 +10,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <mutex>
 #include <vector>
 
 #include "bending.hpp"
@@ -155,6 +156,7 @@ class Shell {
   bool strength_dirty_ = false;
   StepStats stats_;
   mutable PhaseTimes times_;  // mutable: vertex_positions (const) times the mesh
+  mutable std::mutex mesh_mutex_;  // vertex_positions: one at a time (its timer, its cache)
   RowMatX3 particle_pos_;
   Eigen::VectorXd particle_temp_, rotation_, applied_rotation_;
 };
