@@ -3,9 +3,10 @@ n × n vertex mesh (1000 × 1000 = 1M vertices), lit at a corner, frames/s on 1 
 with a per-phase profile of the frame. Not a test: timings depend on the machine and its load
 (the load average is printed and saved with every number).
 
-A frame is sim.step(1/24) then sim.vertex_positions(), as in python -m thinburn.bench; each
-frame keeps its fastest time over --repeat runs on fresh simulations (the simulation is
-deterministic: frame k does the same work in every run), the thread counts taken in turn.
+A frame is sim.step(1/24) then sim.vertex_positions(), as in python -m thinburn.bench (its
+frame loop is repeated below, so the script stands alone); each frame keeps its fastest time
+over --repeat runs on fresh simulations (the simulation is deterministic: frame k does the
+same work in every run), the thread counts taken in turn.
 
     python scripts/bench_film.py [--cells 512] [--side 1000] [--frames 48] [--start 1 60]
                                  [--threads 1 2] [--repeat 2] [--reuse-output] [--out film.json]
@@ -23,10 +24,60 @@ import time
 import numpy as np
 
 import thinburn
-from thinburn._bench_perf import frame_summary, interleaved_best_frames
 from thinburn.scenes import rect_sheet
 
 SHEET = 1.0  # m, the sheet's side
+DT = 1 / 24
+STAT_KEYS = ("front_active", "burning", "fringe", "awake", "particles", "cg_iterations")
+
+
+# The frame loop of python -m thinburn.bench (its _bench_perf), kept here so that the script
+# stands alone wherever the bench package goes.
+def run_frames(sim, frames: int, warmup: int):
+    """Step `warmup` frames untimed, then time `frames` frames of step + vertex_positions:
+    (step ms, vertex_positions ms, {stat: per frame}), sim.stats() read after each timer."""
+    for _ in range(warmup):
+        sim.step(DT)
+    step_ms, pos_ms = np.empty(frames), np.empty(frames)
+    stats = {k: np.zeros(frames) for k in STAT_KEYS}
+    for f in range(frames):
+        t0 = time.perf_counter()
+        sim.step(DT)
+        t1 = time.perf_counter()
+        sim.vertex_positions()
+        t2 = time.perf_counter()
+        step_ms[f], pos_ms[f] = 1e3 * (t1 - t0), 1e3 * (t2 - t1)
+        st = sim.stats()
+        for k in STAT_KEYS:
+            stats[k][f] = float(st.get(k, 0))
+    return step_ms, pos_ms, stats
+
+
+def interleaved_best_frames(makers, frames: int, warmup: int, repeat: int):
+    """run_frames on fresh simulations, the thread counts in turn (1, 2, 1, 2, ...), each frame
+    keeping its fastest time: {threads: (step ms, vertex_positions ms, stats of run 1, sim)}."""
+    best = {}
+    for _ in range(max(1, repeat)):
+        for threads, make in makers.items():
+            sim = make()
+            step_ms, pos_ms, stats = run_frames(sim, frames, warmup)
+            if threads in best:
+                b = best[threads]
+                step_ms, pos_ms, stats = np.minimum(b[0], step_ms), np.minimum(b[1], pos_ms), b[2]
+            best[threads] = (step_ms, pos_ms, stats, sim)
+    return best
+
+
+def frame_summary(step_ms, pos_ms, stats) -> dict:
+    """fps = frames / total time; mean and median frame; the vertex_positions share; the
+    active counts' means."""
+    ms = step_ms + pos_ms
+    secs = float(ms.sum()) / 1e3
+    out = dict(frames=int(len(ms)), seconds=secs, ms_per_frame=float(ms.mean()),
+               median_ms=float(np.median(ms)), frames_per_second=len(ms) / secs,
+               positions_ms=float(pos_ms.mean()))
+    out.update({k: float(v.mean()) for k, v in stats.items()})
+    return out
 
 
 def film_mesh(side: int):
@@ -57,7 +108,7 @@ class ReusedOutput:
         return getattr(self.sim, name)
 
 
-def profile(sim, frames: int, dt: float = 1 / 24) -> dict:
+def profile(sim, frames: int, dt: float = DT) -> dict:
     """Mean ms per frame of each phase (Simulation.phase_seconds), over `frames` more frames."""
     sim.step(dt)
     before = sim.phase_seconds()
