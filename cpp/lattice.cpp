@@ -96,11 +96,12 @@ inline void zero4(Lanes4& v) { v.setZero(); }
 // (x, y, z, 0) then top (x, y, z, 0). Each point reads its own stencil and writes its own row,
 // summing w * ((1 - r) * d_bottom + r * d_top) in stencil order from zero, adding the rest point
 // and raising z to z_min: the result does not depend on the thread count. Returns true when a
-// couple index is out of range (couple 0 stands in; the caller throws).
+// couple index is out of range (couple 0 stands in; the caller throws). Points lo..hi-1, or
+// with a list (CachedDeform's groups) the points list[lo..hi-1]: the same arithmetic per point.
 template <int St>
 THINBURN_AVX2_CLONE bool deform_range(const Embedding& e, const double* table, int couples,
                                       Eigen::Ref<RowMatX3>& out, double z_min, Eigen::Index lo,
-                                      Eigen::Index hi) {
+                                      Eigen::Index hi, const std::int32_t* list = nullptr) {
   const std::int32_t* couple = e.couple.data();
   const double* weight = e.weight.data();
   const double* r_of = e.r.data();
@@ -109,7 +110,8 @@ THINBURN_AVX2_CLONE bool deform_range(const Embedding& e, const double* table, i
   const Eigen::Index stride = out.outerStride();
   const auto limit = static_cast<std::uint32_t>(couples);
   bool bad = false;
-  for (Eigen::Index p = lo; p < hi; ++p) {
+  for (Eigen::Index k = lo; k < hi; ++k) {
+    const Eigen::Index p = list ? list[k] : k;
     const double r = r_of[p], s = 1.0 - r;
     Lanes4 acc, bottom, top;
     zero4(acc);
@@ -224,14 +226,116 @@ void FfdLattice::deform(const Embedding& e, Eigen::Ref<RowMatX3> out, double z_m
   // buffer belongs to the calling thread: concurrent deforms (the GIL is released) never share it.
   thread_local std::vector<double> table;
   const int couples = couples_;
-  table.resize(8 * std::size_t(couples));
-  for (int v = 0; v < 2 * couples; ++v) {  // vertex v = 2 * couple + layer: slot 4 v
-    for (int d = 0; d < 3; ++d) table[4 * v + d] = pos_(v, d) - rest_(v, d);
-    table[4 * v + 3] = 0.0;
-  }
+  displacement_table(table);
   const bool bad = e.stencil == 4 ? deform_points<4>(e, table.data(), couples, out, z_min)
                                   : deform_points<9>(e, table.data(), couples, out, z_min);
   if (bad) throw std::invalid_argument("embedding does not fit this lattice");
+}
+
+void FfdLattice::displacement_table(std::vector<double>& table) const {
+  table.resize(8 * std::size_t(couples_));
+  for (int v = 0; v < 2 * couples_; ++v) {  // vertex v = 2 * couple + layer: slot 4 v
+    for (int d = 0; d < 3; ++d) table[4 * v + d] = pos_(v, d) - rest_(v, d);
+    table[4 * v + 3] = 0.0;
+  }
+}
+
+CachedDeform::CachedDeform(const Embedding& e, int couples) : points_(e.size()), moved_(couples, 0) {
+  // Points grouped by their stencil's first couple: every point of a group reads the same
+  // couples (a grid stencil is fixed by its first), so one moved couple redoes only the points
+  // around it, not whole rows of the mesh.
+  const Eigen::Index n = e.size();
+  group_offset_.assign(couples + 1, 0);
+  for (Eigen::Index p = 0; p < n; ++p) {
+    for (int q = 0; q < e.stencil; ++q) {
+      const int c = e.couple[std::size_t(p) * e.stencil + q];
+      if (c < 0 || c >= couples) throw std::invalid_argument("embedding does not fit this lattice");
+    }
+    ++group_offset_[e.couple[std::size_t(p) * e.stencil] + 1];
+  }
+  for (int c = 0; c < couples; ++c) group_offset_[c + 1] += group_offset_[c];
+  group_points_.resize(n);
+  std::vector<int> fill(group_offset_.begin(), group_offset_.end() - 1);
+  for (Eigen::Index p = 0; p < n; ++p) group_points_[fill[e.couple[std::size_t(p) * e.stencil]]++] = static_cast<std::int32_t>(p);
+  // Drop the empty groups; keep each group's couples (those of its first point).
+  std::vector<int> offset(1, 0);
+  for (int c = 0; c < couples; ++c) {
+    const int lo = group_offset_[c], hi = group_offset_[c + 1];
+    if (lo == hi) continue;
+    offset.push_back(hi);
+    const std::size_t first = std::size_t(group_points_[lo]) * e.stencil;
+    group_couples_.insert(group_couples_.end(), e.couple.begin() + first, e.couple.begin() + first + e.stencil);
+  }
+  group_offset_.swap(offset);
+  stencil_ = e.stencil;
+}
+
+void CachedDeform::deform_into(const FfdLattice& lattice, const Embedding& e, double z_min, Eigen::Ref<RowMatX3> out) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (static_cast<int>(moved_.size()) != lattice.couples() || e.size() != points_ || e.stencil != stencil_)
+    throw std::invalid_argument("CachedDeform: the embedding or the lattice is not the one it was made for");
+  if (out.rows() != points_)
+    throw std::invalid_argument("out must have " + std::to_string(points_) + " rows, got " + std::to_string(out.rows()));
+  if (std::isnan(z_min)) throw std::invalid_argument("z_min must not be NaN");
+  thread_local std::vector<double> table;
+  lattice.displacement_table(table);
+  const long points = moved_points(table, z_min);
+  const int couples = lattice.couples();
+  if (2 * points > points_) {
+    // Most of the mesh moved: straight into out in the mesh's order, as FfdLattice::deform
+    // (no copy; the groups' order jumps between rows). The kept positions go stale.
+    deform_all(e, table.data(), couples, z_min, out);
+    positions_valid_ = false;
+  } else {
+    positions_.resize(points_, 3);
+    Eigen::Ref<RowMatX3> kept(positions_);
+    if (!positions_valid_) {
+      deform_all(e, table.data(), couples, z_min, kept);
+    } else {
+      redone_ = points;
+      const double* tab = table.data();  // the caller's: table is thread_local, the helpers' own are empty
+      const long per_group = std::max<long>(1, points / std::max<long>(1, static_cast<long>(dirty_.size())));
+      parallel_for(0, static_cast<long>(dirty_.size()), per_group * kPointCost, [&](long i) {
+        const long g = dirty_[i];
+        // The couples were checked at construction: the kernel cannot meet one out of range.
+        if (stencil_ == 4) deform_range<4>(e, tab, couples, kept, z_min, group_offset_[g], group_offset_[g + 1], group_points_.data());
+        else deform_range<9>(e, tab, couples, kept, z_min, group_offset_[g], group_offset_[g + 1], group_points_.data());
+      });
+    }
+    positions_valid_ = true;
+    // One memcpy where out's rows are packed (numpy's C order): Eigen's copy into a Ref with a
+    // run-time stride went row by row, 10 % of a film frame.
+    if (out.outerStride() == 3) {
+      std::memcpy(out.data(), positions_.data(), sizeof(double) * 3 * std::size_t(points_));
+    } else {
+      out = positions_;
+    }
+  }
+  table_.swap(table);
+  z_min_ = z_min;
+  table_valid_ = true;
+}
+
+long CachedDeform::moved_points(const std::vector<double>& table, double z_min) {
+  const bool all = !table_valid_ || z_min != z_min_;
+  for (std::size_t c = 0; c < moved_.size(); ++c)
+    moved_[c] = all || std::memcmp(&table[8 * c], &table_[8 * c], 8 * sizeof(double)) != 0;
+  dirty_.clear();
+  long points = 0;
+  for (long g = 0; g < groups(); ++g)
+    for (int q = 0; q < stencil_; ++q)
+      if (moved_[group_couples_[std::size_t(g) * stencil_ + q]]) {
+        dirty_.push_back(g);
+        points += group_offset_[g + 1] - group_offset_[g];
+        break;
+      }
+  return points;
+}
+
+void CachedDeform::deform_all(const Embedding& e, const double* table, int couples, double z_min, Eigen::Ref<RowMatX3> out) {
+  redone_ = points_;
+  if (stencil_ == 4) deform_points<4>(e, table, couples, out, z_min);
+  else deform_points<9>(e, table, couples, out, z_min);
 }
 
 Eigen::VectorXd FfdLattice::scatter(const Embedding& e, const Eigen::VectorXd& values) const {

@@ -10,6 +10,7 @@
 
 #include <cstdint>
 #include <limits>
+#include <mutex>
 #include <vector>
 
 namespace thinburn {
@@ -32,6 +33,48 @@ struct Embedding {
   RowMatX3 rest;                  ///< n x 3: rest positions of the points
   /// @brief Number of embedded points.
   Eigen::Index size() const { return r.size(); }
+};
+
+class FfdLattice;
+
+/// @brief The deformed positions of one embedding, kept from call to call. A call redoes only
+/// the points one of whose couples moved since the last call (bitwise: a sleeping couple keeps
+/// its points as they were), with FfdLattice::deform's kernel on the same displacement table,
+/// so the positions are bit-identical to a full deform. The points are grouped by stencil (all
+/// the points of a control cell read the same couples), so a moving region redoes its own
+/// points only. When more than half of them moved, a call deforms every point straight into
+/// the caller's rows, as FfdLattice::deform (no copy), and the next call with fewer moved
+/// deforms every point once more to keep them. One call at a time (a mutex).
+class CachedDeform {
+ public:
+  CachedDeform() = default;
+  /// @brief For points embedded in a lattice of `couples` couples (the embedding is not kept:
+  /// each call takes it again, and it must be the same one).
+  CachedDeform(const Embedding& e, int couples);
+  /// @brief The points deformed by the lattice's control positions now, into out (n x 3);
+  /// z_min as FfdLattice::deform (a change redoes every point).
+  void deform_into(const FfdLattice& lattice, const Embedding& e, double z_min, Eigen::Ref<RowMatX3> out);
+  /// @brief Points the last call computed (the others were copied from the call before).
+  long points_redone() const { return redone_; }
+  /// @brief Groups of points that share a stencil.
+  long groups() const { return static_cast<long>(group_offset_.size()) - 1; }
+
+ private:
+  long moved_points(const std::vector<double>& table, double z_min);  // fills moved_, dirty_
+  void deform_all(const Embedding& e, const double* table, int couples, double z_min, Eigen::Ref<RowMatX3> out);
+  Eigen::Index points_ = 0;
+  int stencil_ = 0;
+  std::vector<int> group_offset_;            // group g: group_points_[group_offset_[g] .. [g + 1])
+  std::vector<std::int32_t> group_points_;   // point indices, grouped
+  std::vector<int> group_couples_;           // per group its stencil's couples
+  std::vector<double> table_;                // the displacement table of the last call
+  std::vector<std::uint8_t> moved_;          // per couple, scratch
+  std::vector<long> dirty_;                  // groups to redo, scratch
+  RowMatX3 positions_;                       // the points as of table_ (when positions_valid_)
+  double z_min_ = 0.0;
+  bool table_valid_ = false, positions_valid_ = false;
+  long redone_ = 0;
+  std::mutex mutex_;
 };
 
 /// @brief Which control vertices are joined by springs, and which couples are neighbours.
@@ -83,6 +126,10 @@ class FfdLattice {
   /// lattice (out is then partly written).
   void deform(const Embedding& e, Eigen::Ref<RowMatX3> out,
               double z_min = -std::numeric_limits<double>::infinity()) const;
+
+  /// @brief The per-couple displacement table deform reads: 8 doubles per couple, bottom
+  /// (x, y, z, 0) then top (x, y, z, 0), current minus rest.
+  void displacement_table(std::vector<double>& table) const;
 
   /// @brief Spread per-point values onto the control vertices with the embedding's weights
   /// (the transpose of the interpolation): sum over points of weight * value. Serial, fixed order.

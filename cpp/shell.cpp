@@ -59,6 +59,7 @@ Shell::Shell(const Sheet& sheet, const ShellParams& params, const std::vector<do
   // and it would round the fold off (its edges shrank to 0.76 in a free fall).
   mesh_interp_ = rest_is_flat() ? LatticeInterp::QuadraticBSpline : LatticeInterp::Trilinear;
   vertex_embedding_ = lattice_->embed(coords, sheet.vertices(), mesh_interp_);
+  mesh_deform_ = std::make_unique<CachedDeform>(vertex_embedding_, lattice_->couples());
   cell_area_.assign(N * N, sheet.du() * sheet.dv());
   // Eq 3 sums over the ignition points, the burning cells: the same fire at twice the grid
   // resolution has four times the points. Each cell counts as its share of a cell of the
@@ -414,13 +415,28 @@ void Shell::set_dynamics_params(const DynamicsParams& p) {
 }
 
 void Shell::vertex_positions(RowMatX3& out) const {
+  std::lock_guard<std::mutex> lock(mesh_mutex_);
+  PhaseTimer timer(times_, Phase::Mesh);
   const double z_min = params_.has_floor ? params_.floor_z : -std::numeric_limits<double>::infinity();
   if (control_) return control_->deform(surface_vertices_, lattice_->positions(), out, z_min);
   out.resize(sheet_->vertices().rows(), 3);
   // The lattice's bottom layer is held half a thickness below the floor; the surface itself
   // never goes through it. Clamped inside deform's pass: a second pass over a strided column
   // cost as much as the deform itself on a million-vertex mesh.
-  lattice_->deform(vertex_embedding_, out, z_min);
+  mesh_deform_->deform_into(*lattice_, vertex_embedding_, z_min, out);
+}
+
+void Shell::vertex_positions_into(Eigen::Ref<RowMatX3> out) const {
+  if (control_) {
+    RowMatX3 tmp;
+    vertex_positions(tmp);
+    out = tmp;
+    return;
+  }
+  std::lock_guard<std::mutex> lock(mesh_mutex_);
+  PhaseTimer timer(times_, Phase::Mesh);
+  const double z_min = params_.has_floor ? params_.floor_z : -std::numeric_limits<double>::infinity();
+  mesh_deform_->deform_into(*lattice_, vertex_embedding_, z_min, out);
 }
 
 void Shell::hand_over_masses_and_strength() {
@@ -444,15 +460,22 @@ void Shell::hand_over_masses_and_strength() {
 }
 
 void Shell::step(double dt, const ShellSources& src, const Eigen::Vector3d& wind) {
-  if (src.emit_pos->rows() > 0) particles_->emit(*src.emit_pos, *src.emit_normal, *src.emit_len, dt);
-  particles_->step(dt, wind);
-  particle_pos_ = particles_->positions();
-  particle_temp_ = particles_->temperatures();
-  bending_->add_particle_heat(lattice_->positions(), particle_pos_, particle_temp_, dt);
-  bending_->set_pyrolysis(lattice_->positions(), *src.ignition_points);
+  {
+    PhaseTimer timer(times_, Phase::Particles);
+    if (src.emit_pos->rows() > 0) particles_->emit(*src.emit_pos, *src.emit_normal, *src.emit_len, dt);
+    particles_->step(dt, wind);
+    particle_pos_ = particles_->positions();
+    particle_temp_ = particles_->temperatures();
+  }
+  {
+    PhaseTimer timer(times_, Phase::Heat);
+    bending_->add_particle_heat(lattice_->positions(), particle_pos_, particle_temp_, dt);
+    bending_->set_pyrolysis(lattice_->positions(), *src.ignition_points);
+    bending_->rotation(rotation_);
+  }
+  PhaseTimer timer(times_, Phase::Dynamics);
   hand_over_masses_and_strength();
   dynamics_->set_wind(wind);
-  bending_->rotation(rotation_);
   // Far from the fire D creeps by micro-radians as faint heat arrives; passing those on would
   // keep the whole lattice awake. A couple's applied rotation follows D in steps of at least
   // kRotationQuantum, so regions at rest sleep while the error stays below that quantum.

@@ -10,6 +10,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <mutex>
 #include <vector>
 
 #include "bending.hpp"
@@ -17,6 +18,7 @@
 #include "dynamics.hpp"
 #include "lattice.hpp"
 #include "particles.hpp"
+#include "phase_times.hpp"
 #include "sheet.hpp"
 #include "surface_cells.hpp"
 
@@ -83,6 +85,11 @@ class Shell {
 
   /// @brief Deformed mesh vertices, raised to the floor where it has one.
   void vertex_positions(RowMatX3& out) const;
+  /// @brief The same into a caller's n x 3 rows (no allocation on a grid lattice).
+  void vertex_positions_into(Eigen::Ref<RowMatX3> out) const;
+  /// @brief Mesh vertices the last vertex_positions call recomputed (a grid lattice keeps the
+  /// others from the call before: their couples had not moved); -1 on a control surface.
+  long mesh_points_redone() const { return mesh_deform_ ? mesh_deform_->points_redone() : -1; }
 
   void set_dynamics_params(const DynamicsParams& p);
   /// @brief Per-control-vertex wind for the motion (LatticeDynamics::set_wind_field).
@@ -99,6 +106,8 @@ class Shell {
   const StepStats& last_step_stats() const { return stats_; }
   /// @brief Per-control-vertex masses now (kg).
   const Eigen::VectorXd& control_masses() const { return control_mass_; }
+  /// @brief Wall-clock seconds per phase of the shell's steps and mesh deforms so far.
+  const PhaseTimes& phase_times() const { return times_; }
 
   /// @brief Everything a step changes, for a step that may have to be undone.
   struct Checkpoint;
@@ -139,10 +148,15 @@ class Shell {
   std::unique_ptr<ParticleSystem> particles_;
   std::unique_ptr<Bending> bending_;
   Embedding vertex_embedding_;
+  // The mesh's deformed vertices kept between frames: only those near moving couples are
+  // redone (a grid lattice's mesh; vertex_positions is const, the pointer shallow).
+  std::unique_ptr<CachedDeform> mesh_deform_;
   Eigen::VectorXd control_mass_, control_area_, burnt_area_, strength_;
   bool mass_dirty_ = false;
   bool strength_dirty_ = false;
   StepStats stats_;
+  mutable PhaseTimes times_;  // mutable: vertex_positions (const) times the mesh
+  mutable std::mutex mesh_mutex_;  // vertex_positions: one at a time (its timer, its cache)
   RowMatX3 particle_pos_;
   Eigen::VectorXd particle_temp_, rotation_, applied_rotation_;
 };

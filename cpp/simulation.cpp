@@ -572,18 +572,32 @@ void Simulation::step(double dt) {
 
 void Simulation::step_unguarded(double dt) {
   const double t_end = time_ + dt;
-  pace_step(dt);
-  refresh_law();
-  for (int c : cells_->advance(t_end, law_, view_)) {
-    if (state_[c] != kUnburnt) continue;
-    state_[c] = kBurning;
-    burning_.push_back(c);
+  {
+    PhaseTimer timer(times_, Phase::FireFront);
+    pace_step(dt);
+    refresh_law();
+    for (int c : cells_->advance(t_end, law_, view_)) {
+      if (state_[c] != kUnburnt) continue;
+      state_[c] = kBurning;
+      burning_.push_back(c);
+    }
   }
   time_ = t_end;
-  retire_burnt();
+  {
+    PhaseTimer timer(times_, Phase::Cells);
+    retire_burnt();
+  }
   if (shell_) step_shell(dt);
   locator_stale_ = shell_ != nullptr;
+  PhaseTimer timer(times_, Phase::Cells);
   heat_ignite(dt);
+}
+
+PhaseTimes Simulation::phase_times() const {
+  PhaseTimes t = times_;
+  if (shell_)
+    for (std::size_t p = 0; p < kPhases; ++p) t.seconds[p] += shell_->phase_times().seconds[p];
+  return t;
 }
 
 void Simulation::retire_burnt() {
@@ -642,6 +656,17 @@ RowMatX3 Simulation::vertex_positions() const {
   RowMatX3 out;
   shell_->vertex_positions(out);
   return out;
+}
+
+void Simulation::vertex_positions_into(Eigen::Ref<RowMatX3> out) const {
+  if (out.rows() != vertices_.rows())
+    throw std::invalid_argument("out: expected " + std::to_string(vertices_.rows()) + " rows (one per vertex), got " +
+                                std::to_string(out.rows()));
+  if (!shell_) {
+    out = vertices_;
+    return;
+  }
+  shell_->vertex_positions_into(out);
 }
 
 Eigen::VectorXd Simulation::vertex_char() const {
@@ -730,7 +755,10 @@ void Simulation::gather_shell_sources() {
 }
 
 void Simulation::step_shell(double dt) {
-  gather_shell_sources();
+  {
+    PhaseTimer timer(times_, Phase::Sources);
+    gather_shell_sources();
+  }
   shell_->step(dt, ShellSources{&emit_pos_, &emit_normal_, &emit_len_, &ignition_pts_}, wind_);
 }
 

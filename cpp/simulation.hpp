@@ -8,6 +8,7 @@
 #include "fire_front.hpp"
 #include "lattice.hpp"
 #include "particles.hpp"
+#include "phase_times.hpp"
 #include "sheet.hpp"
 #include "shell.hpp"
 
@@ -162,6 +163,9 @@ class Simulation {
   /// @brief Current positions of the cell centres (one row per cell).
   RowMatX3 cell_positions() const;
   RowMatX3 vertex_positions() const;
+  /// @brief vertex_positions into a caller's n x 3 rows; throws std::invalid_argument naming
+  /// `out` when its row count is not the mesh's.
+  void vertex_positions_into(Eigen::Ref<RowMatX3> out) const;
   Eigen::VectorXd vertex_char() const;
   Eigen::VectorXd vertex_ignition_times() const;
   Eigen::VectorXd vertex_burnout_times() const;
@@ -199,6 +203,8 @@ class Simulation {
   /// @brief Per-control-vertex masses now (kg).
   const Eigen::VectorXd& control_masses() const;
   void set_dynamics_params(const DynamicsParams& p);
+  /// @brief Wall-clock seconds per phase of the steps and vertex_positions calls so far.
+  PhaseTimes phase_times() const;
 
  private:
   Eigen::Vector3d cell_position(int cell) const;
@@ -276,6 +282,7 @@ class Simulation {
   // Nearest-cell queries for ignite; its displacement bounds follow the lattice lazily.
   std::unique_ptr<CellLocator> locator_;
   mutable bool locator_stale_ = true;
+  PhaseTimes times_;  // the fire's phases; the shell keeps its own
 };
 
 }  // namespace thinburn

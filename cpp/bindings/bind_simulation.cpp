@@ -205,6 +205,14 @@ void define_simulation(py::module_& m) {
              return s.vertex_positions();
            },
            py::arg("threads"))
+      .def("vertex_positions_into",
+           [](const S& s, Eigen::Ref<RowMatX3> out, int threads) {
+             py::gil_scoped_release release;
+             ScopedThreads scope(threads);
+             s.vertex_positions_into(out);
+           },
+           py::arg("out").noconvert(), py::arg("threads"))
+      .def("mesh_points_redone", [](const S& s) { return s.shell() ? s.shell()->mesh_points_redone() : -1L; })
       .def("vertex_char", &S::vertex_char)
       .def("vertex_ignition_times", &S::vertex_ignition_times)
       .def("vertex_burnout_times", &S::vertex_burnout_times)
@@ -255,6 +263,12 @@ void define_simulation(py::module_& m) {
         DynamicsParams p = s.params().dynamics;
         apply_dynamics_kwargs(p, kw);
         s.set_dynamics_params(p);
+      })
+      .def("phase_seconds", [](const S& s) {
+        const PhaseTimes t = s.phase_times();
+        py::dict d;
+        for (std::size_t p = 0; p < kPhases; ++p) d[phase_name(static_cast<Phase>(p))] = t.seconds[p];
+        return d;
       })
       .def("step_stats", [](const S& s) {
         const StepStats& t = s.last_step_stats();

@@ -511,6 +511,12 @@ class Simulation:
         self._require_shell("step_stats")
         return dict(self._sim.step_stats())
 
+    def phase_seconds(self) -> dict:
+        """Wall-clock seconds spent in each phase of the steps and ``vertex_positions`` calls
+        since the simulation was built: ``fire_front``, ``cells``, ``sources``, ``particles``,
+        ``heat``, ``dynamics``, ``mesh`` (a profile; scripts/bench_film.py, docs/bench.md)."""
+        return dict(self._sim.phase_seconds())
+
     def _require_shell(self, what: str) -> int:
         if not self._sim.has_shell:
             raise ValueError(f"{what}: this simulation was made with shell=False")
@@ -603,9 +609,29 @@ class Simulation:
         """(N, N, 3) current cell-centre positions; (num_cells, 3) on a surface."""
         return self._sim.cell_positions().reshape(self._cell_shape(3))
 
-    def vertex_positions(self) -> np.ndarray:
-        """(n, 3) current positions of the input mesh's vertices."""
-        return self._sim.vertex_positions(self._threads)
+    def vertex_positions(self, out=None) -> np.ndarray:
+        """(n, 3) current positions of the input mesh's vertices.
+
+        out: an (n, 3) C-contiguous float64 array to write them into (and return), reused
+        from frame to frame: a fresh million-vertex array costs more than the deform
+        (docs/bench.md, "film")."""
+        if out is None:
+            return self._sim.vertex_positions(self._threads)
+        n = self.n_vertices
+        if not (isinstance(out, np.ndarray) and out.dtype == np.float64 and out.shape == (n, 3)
+                and out.flags.c_contiguous and out.flags.writeable):
+            got = (f"{out.dtype} {out.shape}" if isinstance(out, np.ndarray) else type(out).__name__)
+            raise ValueError(f"out: expected a writeable C-contiguous float64 array of shape ({n}, 3) "
+                             f"(np.empty(({n}, 3))), got {got}")
+        self._sim.vertex_positions_into(out, self._threads)
+        return out
+
+    @property
+    def mesh_points_redone(self) -> int:
+        """Mesh vertices the last ``vertex_positions`` recomputed; the others kept their
+        positions from the call before, their couples having not moved (a flat sheet's
+        lattice; -1 where the lattice follows a control surface or there is no shell)."""
+        return int(self._sim.mesh_points_redone())
 
     def vertex_char(self) -> np.ndarray:
         """(n,) char amount in [0, 1] per input vertex, interpolated from the cells."""

@@ -1,0 +1,180 @@
+"""Benchmark: film scale (issue #11, item 4). A flat 1 m paper sheet with N² cells (512²) and an
+n × n vertex mesh (1000 × 1000 = 1M vertices), lit at a corner, frames/s on 1 and 2 threads
+with a per-phase profile of the frame. Not a test: timings depend on the machine and its load
+(the load average is printed and saved with every number).
+
+A frame is sim.step(1/24) then sim.vertex_positions(), as in python -m thinburn.bench (its
+frame loop is repeated below, so the script stands alone); each frame keeps its fastest time
+over --repeat runs on fresh simulations (the simulation is deterministic: frame k does the
+same work in every run), the thread counts taken in turn.
+
+    python scripts/bench_film.py [--cells 512] [--side 1000] [--frames 48] [--start 1 60]
+                                 [--threads 1 2] [--repeat 2] [--reuse-output] [--out film.json]
+
+Each --start is a window: that many simulated seconds are stepped untimed first (the fire
+then covers a 1 cm disc at 1 s, a 20 cm quarter-disc at 60 s).
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import time
+
+import numpy as np
+
+import thinburn
+from thinburn.scenes import rect_sheet
+
+SHEET = 1.0  # m, the sheet's side
+DT = 1 / 24
+STAT_KEYS = ("front_active", "burning", "fringe", "awake", "particles", "cg_iterations")
+
+
+# The frame loop of python -m thinburn.bench (its _bench_perf), kept here so that the script
+# stands alone wherever the bench package goes.
+def run_frames(sim, frames: int, warmup: int):
+    """Step `warmup` frames untimed, then time `frames` frames of step + vertex_positions:
+    (step ms, vertex_positions ms, {stat: per frame}), sim.stats() read after each timer."""
+    for _ in range(warmup):
+        sim.step(DT)
+    step_ms, pos_ms = np.empty(frames), np.empty(frames)
+    stats = {k: np.zeros(frames) for k in STAT_KEYS}
+    for f in range(frames):
+        t0 = time.perf_counter()
+        sim.step(DT)
+        t1 = time.perf_counter()
+        sim.vertex_positions()
+        t2 = time.perf_counter()
+        step_ms[f], pos_ms[f] = 1e3 * (t1 - t0), 1e3 * (t2 - t1)
+        st = sim.stats()
+        for k in STAT_KEYS:
+            stats[k][f] = float(st.get(k, 0))
+    return step_ms, pos_ms, stats
+
+
+def interleaved_best_frames(makers, frames: int, warmup: int, repeat: int):
+    """run_frames on fresh simulations, the thread counts in turn (1, 2, 1, 2, ...), each frame
+    keeping its fastest time: {threads: (step ms, vertex_positions ms, stats of run 1, sim)}."""
+    best = {}
+    for _ in range(max(1, repeat)):
+        for threads, make in makers.items():
+            sim = make()
+            step_ms, pos_ms, stats = run_frames(sim, frames, warmup)
+            if threads in best:
+                b = best[threads]
+                step_ms, pos_ms, stats = np.minimum(b[0], step_ms), np.minimum(b[1], pos_ms), b[2]
+            best[threads] = (step_ms, pos_ms, stats, sim)
+    return best
+
+
+def frame_summary(step_ms, pos_ms, stats) -> dict:
+    """fps = frames / total time; mean and median frame; the vertex_positions share; the
+    active counts' means."""
+    ms = step_ms + pos_ms
+    secs = float(ms.sum()) / 1e3
+    out = dict(frames=int(len(ms)), seconds=secs, ms_per_frame=float(ms.mean()),
+               median_ms=float(np.median(ms)), frames_per_second=len(ms) / secs,
+               positions_ms=float(pos_ms.mean()))
+    out.update({k: float(v.mean()) for k, v in stats.items()})
+    return out
+
+
+def film_mesh(side: int):
+    """The film sheet: a side × side vertex grid over a SHEET-metre square (2 (side-1)² faces)."""
+    return rect_sheet(SHEET, SHEET, nx=side, ny=side)
+
+
+def make_sim(verts, faces, cells: int, threads: int, reuse: bool = False):
+    sim = thinburn.Simulation(verts, faces, material="paper", cells=cells, threads=threads,
+                              floor=0.0)  # on a table, as the demo sheets
+    sim.ignite((0.0, 0.0, 0.0), time=0.0, radius=0.02)  # a corner
+    return ReusedOutput(sim) if reuse else sim
+
+
+class ReusedOutput:
+    """A Simulation whose vertex_positions() writes into one array kept from frame to frame
+    (vertex_positions(out=...)): what a renderer or an exporter that copies each frame on
+    does. A fresh (n, 3) array per frame costs its page faults (see docs/bench.md)."""
+
+    def __init__(self, sim):
+        self.sim = sim
+        self.out = np.empty((sim.n_vertices, 3))
+
+    def vertex_positions(self):
+        return self.sim.vertex_positions(out=self.out)
+
+    def __getattr__(self, name):
+        return getattr(self.sim, name)
+
+
+def profile(sim, frames: int, dt: float = DT) -> dict:
+    """Mean ms per frame of each phase (Simulation.phase_seconds), over `frames` more frames."""
+    sim.step(dt)
+    before = sim.phase_seconds()
+    t0 = time.perf_counter()
+    for _ in range(frames):
+        sim.step(dt)
+        sim.vertex_positions()
+    wall = time.perf_counter() - t0
+    after = sim.phase_seconds()
+    out = {k: 1e3 * (after[k] - before[k]) / frames for k in after}
+    out["frame (wall)"] = 1e3 * wall / frames
+    return out
+
+
+def measure(verts, faces, args, start: float, log) -> list:
+    """Rows for one window: `args.frames` frames timed after `start` simulated seconds."""
+    warmup = max(1, round(start * 24))
+    makers = {t: (lambda t=t: make_sim(verts, faces, args.cells, t, args.reuse_output)) for t in args.threads}
+    load0 = os.getloadavg()
+    best = interleaved_best_frames(makers, args.frames, warmup, args.repeat)
+    load1 = os.getloadavg()
+    rows = []
+    for t, (step_ms, pos_ms, stats, sim) in best.items():
+        r = dict(threads=t, start_seconds=start, cells=args.cells, vertices=len(verts),
+                 lattice=sim.lattice_size, reuse_output=args.reuse_output, load_before=load0,
+                 load_after=load1, **frame_summary(step_ms, pos_ms, stats))
+        r["profile_ms"] = profile(sim, args.profile_frames) if hasattr(sim, "phase_seconds") else {}
+        r["mesh_points_redone"] = getattr(sim, "mesh_points_redone", None)
+        rows.append(r)
+        log(f"start={start:5.1f} s threads={t}  {r['frames_per_second']:6.1f} frames/s  "
+            f"{r['ms_per_frame']:7.2f} ms/frame (vertex_positions {r['positions_ms']:.2f} ms)  "
+            f"awake={r['awake']:.0f} burning={r['burning']:.0f} cg={r['cg_iterations']:.0f}  "
+            f"load {load0[0]:.2f} -> {load1[0]:.2f}")
+        log("    " + "  ".join(f"{k} {v:.2f}" for k, v in r["profile_ms"].items())
+            + f"  (mesh vertices redone {r['mesh_points_redone']})")
+    return rows
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--cells", type=int, default=512)
+    ap.add_argument("--side", type=int, default=1000, help="mesh vertices per side")
+    ap.add_argument("--frames", type=int, default=48, help="frames timed per window")
+    ap.add_argument("--start", type=float, nargs="+", default=[1.0, 60.0],
+                    help="simulated seconds stepped (untimed) before each window")
+    ap.add_argument("--threads", type=int, nargs="+", default=[1, 2])
+    ap.add_argument("--repeat", type=int, default=2)
+    ap.add_argument("--profile-frames", type=int, default=24)
+    ap.add_argument("--reuse-output", action="store_true",
+                    help="vertex_positions(out=...) into one array kept across frames")
+    ap.add_argument("--out", default="film.json")
+    args = ap.parse_args()
+    verts, faces = film_mesh(args.side)
+    t0 = time.perf_counter()
+    probe = make_sim(verts, faces, args.cells, args.threads[0])
+    build_s = time.perf_counter() - t0
+    print(f"film: {len(verts)} vertices, {probe.num_cells} cells, lattice {probe.lattice_size}, "
+          f"build {build_s:.1f} s, thinburn at {thinburn.__file__}", flush=True)
+    del probe
+    rows = []
+    for start in args.start:
+        rows += measure(verts, faces, args, start, lambda m: print(m, flush=True))
+    with open(args.out, "w") as f:
+        json.dump(dict(build_seconds=build_s, argv=vars(args), rows=rows), f, indent=2)
+    print(f"saved {args.out}")
+
+
+if __name__ == "__main__":
+    main()
