@@ -43,6 +43,7 @@ CRUMPLE_REFERENCE_K = 0.05  # Table 1's K_structure for paper: its crumple gain 
 # validate them and name the field in their errors). See docs/dynamics.md, docs/particles.md,
 # docs/bending.md for units and meanings.
 DYNAMICS_KEYS = ("k_thickness", "k_transverse", "stiffness_unit", "buoyancy", "wind_drag", "friction",
+                 "self_collision", "self_distance",
                  "crumple_gain", "plasticity", "crumple_momentum", "bimetal", "anisotropic_curl", "sleep_speed", "sleeping", "substeps", "max_substeps",
                  "safety", "max_stretch", "cg_tolerance", "cg_max_iterations", "gravity",
                  "preconditioner", "ldlt_max_vertices", "refactor_iterations", "wake_hold")
