@@ -168,8 +168,8 @@ int SelfContact::apply(double sep, RowMatX3& x, RowMatX3& v, const Eigen::Vector
 bool SelfContact::broad_valid(double sep, const RowMatX3& x) const {
   if (broad_.rows() != C_ || broad_sep_ != sep) return false;
   const double half = 0.5 * kMargin * sep;
-  for (int c : moving_)
-    if ((mid(x, c) - broad_.row(c).transpose()).squaredNorm() >= half * half) return false;
+  for (int c : moving_)  // one that woke since was not hashed: its pairs are not candidates
+    if (!broad_moving_[c] || (mid(x, c) - broad_.row(c).transpose()).squaredNorm() >= half * half) return false;
   return true;
 }
 
@@ -179,6 +179,8 @@ void SelfContact::broad_phase(double sep, const RowMatX3& x) {
   broad_.resize(C_, 3);
   for (int c = 0; c < C_; ++c) broad_.row(c) = mid(x, c).transpose();
   broad_sep_ = sep;
+  broad_moving_.assign(C_, 0);
+  for (int c : moving_) broad_moving_[c] = 1;
   candidates_.clear();
   const double reach = (1.0 + kMargin) * sep;
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(INFINITY), hi = -lo;

@@ -71,6 +71,7 @@ class SelfContact {
   RowMatX3 last_;                            // mid-points after the previous apply (sides)
   RowMatX3 broad_;                           // mid-points when the candidates were found (0 rows: none)
   double broad_sep_ = 0.0;                   // the separation they were found for
+  std::vector<std::uint8_t> broad_moving_;   // per couple: it moved when they were found
   std::vector<std::pair<int, int>> candidates_;  // (couple, triangle) that may come within the separation
   // Per apply (reused buffers).
   RowMatX3 mid_, vmid_;                      // per couple, valid for the couples in involved_
