@@ -7,6 +7,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "colliders.hpp"
+
 namespace thinburn {
 namespace {
 
@@ -21,6 +23,8 @@ constexpr int kBits = 21;          // per axis in a hash key
 // Candidate pairs are found within (1 + kMargin) separations and kept until a couple has moved
 // by half of kMargin separations: a sheet moving slowly far from itself rarely looks again.
 constexpr double kMargin = 2.0;
+// A pair this many separations apart, or closer, at rest is never tested (see narrow_phase).
+constexpr double kRestNear = 2.0;
 
 std::int64_t key(const Eigen::Vector3d& p, double cell) {
   const std::int64_t mask = (std::int64_t(1) << kBits) - 1;
@@ -61,7 +65,11 @@ Eigen::Vector3d unit_normal(const Eigen::Vector3d& a, const Eigen::Vector3d& b, 
 
 SelfContact::SelfContact(const LatticeTopology& topo, const RowMatX3& rest) : C_(topo.couples) {
   if (rest.rows() != 2 * C_) throw std::invalid_argument("self contact: rest must have 2 rows per couple");
-  for (int c = 0; c < C_; ++c) thickness_ += (rest.row(2 * c + 1) - rest.row(2 * c)).norm();
+  rest_mid_.resize(C_, 3);
+  for (int c = 0; c < C_; ++c) {
+    thickness_ += (rest.row(2 * c + 1) - rest.row(2 * c)).norm();
+    rest_mid_.row(c) = 0.5 * (rest.row(2 * c) + rest.row(2 * c + 1));
+  }
   thickness_ /= std::max(1, C_);
   const auto& off = topo.nbr_offset;
   const auto& nb = topo.nbr_index;
@@ -281,6 +289,11 @@ void SelfContact::narrow_phase(double sep, const RowMatX3& x, const RowMatX3& v,
       if (!barycentric(lerp(P0, P), lerp(A0, A), lerp(B0, B), lerp(C0, Cc), w) || !inside(w)) continue;
     }
     clamp_weights(pr.b);
+    // Parts of the sheet modelled near each other (sheets stacked 4 mm apart in a 10 mm thick
+    // lattice) are left to the springs: pushed apart to the separation, they tore.
+    const Eigen::Vector3d Pr = at(rest_mid_, c);
+    const double rest_gap = (Pr - closest_on_triangle(Pr, at(rest_mid_, T(0)), at(rest_mid_, T(1)), at(rest_mid_, T(2)))).norm();
+    if (rest_gap < kRestNear * sep) continue;
     pairs_.push_back(pr);
   }
 }

@@ -68,6 +68,7 @@ class SelfContact {
   double cell_ = 0.0;                        // hash cell edge, m: the rest spacing between couples
   std::vector<Eigen::Vector3i> tri_;
   std::vector<int> ring_start_, ring_;       // per couple: couples within kRings rings, sorted
+  RowMatX3 rest_mid_;                        // mid-points at rest
   RowMatX3 last_;                            // mid-points after the previous apply (sides)
   RowMatX3 broad_;                           // mid-points when the candidates were found (0 rows: none)
   double broad_sep_ = 0.0;                   // the separation they were found for
@@ -80,7 +81,7 @@ class SelfContact {
   std::vector<std::uint8_t> is_involved_;
   std::vector<std::pair<std::int64_t, int>> hash_;
   std::vector<Pair> pairs_;
-  double sep_ = 0.0;
+  double sep_ = 0.0;                         // the separation of the apply in progress
 };
 
 }  // namespace thinburn
