@@ -28,7 +28,7 @@ def demo_run(name, cells, seconds, on, vertices=16000):
     steps = int(round(seconds * 24))
     t0 = time.process_time()
     sim.run(seconds)
-    return (time.process_time() - t0) / steps, sim.vertex_positions()
+    return (time.process_time() - t0) / steps, sim.vertex_positions(), ""
 
 
 def fold_run(on, M=24, steps=96, dt=1 / 240):
@@ -49,10 +49,12 @@ def fold_run(on, M=24, steps=96, dt=1 / 240):
     vel[np.repeat(s.ravel() > fold + np.pi * bend, 2), 2] = -1.0
     dyn.set_state(pos, vel)
     D, heat = np.zeros(M * M), np.zeros(2 * M * M)
+    substeps = cg = 0
     t0 = time.process_time()
     for _ in range(steps):
-        dyn.step(dt, D, heat)
-    return (time.process_time() - t0) / steps, lat.positions
+        st = dyn.step(dt, D, heat)
+        substeps, cg = substeps + st.substeps, cg + st.cg_iterations
+    return (time.process_time() - t0) / steps, lat.positions, f" ({substeps} substeps, {cg} CG iterations)"
 
 
 def main():
@@ -69,14 +71,15 @@ def main():
         cases.append(("U fold closing, M = 24 lattice", fold_run))
     print(f"{'case':34s} {'off cpu ms/step':>16s} {'on cpu ms/step':>15s} {'on - off':>10s} identical")
     for label, run in cases:
-        best, final = {False: np.inf, True: np.inf}, {}
+        best, final, note = {False: np.inf, True: np.inf}, {}, {}
         for _ in range(a.repeat):
             for on in (False, True):
-                t, final[on] = run(on)
+                t, final[on], note[on] = run(on)
                 best[on] = min(best[on], t)
         off, on = 1e3 * best[False], 1e3 * best[True]
         same = "yes" if np.array_equal(final[False], final[True]) else "no"
-        print(f"{label:34s} {off:16.3f} {on:15.3f} {on - off:+10.3f} {same}", flush=True)
+        extra = f"  off{note[False]}, on{note[True]}" if note[False] else ""
+        print(f"{label:34s} {off:16.3f} {on:15.3f} {on - off:+10.3f} {same}{extra}", flush=True)
 
 
 if __name__ == "__main__":
