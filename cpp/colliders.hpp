@@ -14,6 +14,10 @@
 
 namespace thinburn {
 
+/// @brief Closest point to p on triangle abc (Ericson, Real-Time Collision Detection §5.1.5).
+Eigen::Vector3d closest_on_triangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
+                                    const Eigen::Vector3d& b, const Eigen::Vector3d& c);
+
 /// @brief The nearest collider's answer at a point.
 struct ColliderHit {
   double distance = 0.0;          ///< m, signed: < 0 inside (to the surface grown by thickness)

@@ -96,6 +96,8 @@ void validate(const DynamicsParams& p) {
   nonneg(p.wind_drag, "wind_drag");
   nonneg(p.friction, "friction");
   nonneg(p.sleep_speed, "sleep_speed");
+  require(std::isfinite(p.self_distance) && p.self_distance > 0.0,
+          "self_distance must be > 0 lattice thicknesses, got " + std::to_string(p.self_distance));
   require(p.gravity.allFinite(), "gravity must be finite");
   require(std::isfinite(p.buoyancy), "buoyancy must be finite");
   require(std::isfinite(p.floor_z), "floor_z must be finite");
@@ -197,6 +199,7 @@ LatticeDynamics::LatticeDynamics(FfdLattice& lattice, const DynamicsParams& p, L
   contact_ = Eigen::VectorXd::Constant(n_, -1.0);
   stick_.assign(n_, 0);
   factor_ = std::make_unique<Factor>();
+  self_contact_ = std::make_unique<SelfContact>(topo_, lat_.rest());
   build_bimetal();
   bend_share_ = target_share();
   if (bend_share_ < 1.0) add_membrane();
@@ -550,6 +553,7 @@ void LatticeDynamics::set_state(const RowMatX3& x, const RowMatX3& v) {
   vel_ = v;
   accel_.setZero();
   forget_history();
+  self_contact_->reset();
   for (int q = 0; q < n_; ++q)
     if (pinned_[q]) vel_.row(q).setZero();
   std::fill(awake_.begin(), awake_.end(), 1);
@@ -838,6 +842,8 @@ int LatticeDynamics::integrate(double dt, int substeps, StepStats& st) {
         explicit_substep(h, p_.integrator == Integrator::Explicit);
       apply_floor(h);
       apply_colliders(h);
+      if (p_.self_collision)
+        self_contact_->apply(self_contact_->separation(p_.self_distance), lat_.positions(), vel_, mass_, slot_);
     }
     st.max_strain = max_active_strain();
     if (!implicit || p_.substeps > 0 || substeps == 0 ||

@@ -14,6 +14,7 @@
 #include "colliders.hpp"
 #include "lattice.hpp"
 #include "membrane.hpp"
+#include "self_contact.hpp"
 
 namespace thinburn {
 
@@ -61,6 +62,8 @@ struct DynamicsParams {
   bool has_floor = false;      ///< nothing goes below floor_z when set
   double floor_z = 0.0;        ///< m
   double friction = 0.5;       ///< Coulomb coefficient on the floor (>= 0)
+  bool self_collision = true;  ///< couples keep self_distance from the sheet's other layers (self_contact.hpp)
+  double self_distance = 1.0;  ///< lattice thicknesses between a couple's mid-point and another part of the sheet (> 0)
   Integrator integrator = Integrator::Implicit;
   double crumple_gain = 1.0;   ///< multiplies the increase of D turned into a crumple (set_material: kCrumpleReferenceK / k_structure)
   double plasticity = 1.0;     ///< in [0, 1]: share of each crumple that the springs' rest lengths keep
@@ -337,6 +340,7 @@ class LatticeDynamics {
   Eigen::VectorXd heat_save_;        // restored, with rest_save_, when a step throws
   std::vector<double> rest_save_;
   std::unique_ptr<Factor> factor_;
+  std::unique_ptr<SelfContact> self_contact_;  // after each substep, as apply_colliders
   int factorizations_ = 0;          // of the step in progress
   bool precond_ldlt_ = false;       // the solve in progress uses factor_
 };

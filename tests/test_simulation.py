@@ -306,7 +306,7 @@ from thinburn.simulation import (BENDING_KEYS, DYNAMICS_KEYS, MAX_COORDINATE, MA
 
 FIRE_KEYS = ("cv", "v_floor", "speed_noise", "duration_noise", "climb", "wind_spread", "max_drive",
              "ash_fraction", "ash_strength")
-BOOL_KEYS = {"heat_fast", "sleeping", "crumple_momentum", "bimetal", "anisotropic_curl"}
+BOOL_KEYS = {"heat_fast", "sleeping", "crumple_momentum", "bimetal", "anisotropic_curl", "self_collision"}
 INT_KEYS = {"substeps", "max_substeps", "cg_max_iterations", "ldlt_max_vertices", "refactor_iterations",
             "wake_hold", "particle_capacity"}
 CHOICE_KEYS = {"preconditioner"}

@@ -403,8 +403,9 @@ def test_a_curling_sheet_never_passes_through_itself(name, seconds):
     (ipctk.has_intersections). Silk burning on its table (the issue's case: 27 crossing edges at
     one frame) and the folded letter, whose halves lie close. Measured: no frame with a
     crossing in 240 s of every demo scene at 64 cells (paper, cloth, hard paper, silk,
-    curtain, lantern, sphere, letter). There is no self-collision response: this checks that
-    the curl stays clear of itself, not that contact is resolved."""
+    curtain, lantern, sphere, letter), before there was a self-collision response. With it on
+    (the default, docs/dynamics.md §3.3) this checks the demo's own motion end to end;
+    tests/test_self_contact.py checks a sheet thrown onto itself."""
     ipctk = pytest.importorskip("ipctk")
     from thinburn.demo import shell_scene
     scene = default_scene(name) if name == "silk" else shell_scene(name)

@@ -56,6 +56,7 @@ void apply_kwargs(DynamicsParams& p, const py::kwargs& kw) {
                      : k == "wind_drag"      ? &p.wind_drag
                      : k == "floor_z"        ? &p.floor_z
                      : k == "friction"       ? &p.friction
+                     : k == "self_distance"  ? &p.self_distance
                      : k == "crumple_gain"   ? &p.crumple_gain
                      : k == "plasticity"     ? &p.plasticity
                      : k == "sleep_speed"    ? &p.sleep_speed
@@ -67,6 +68,7 @@ void apply_kwargs(DynamicsParams& p, const py::kwargs& kw) {
     bool* bfield = k == "has_floor" ? &p.has_floor : k == "sleeping" ? &p.sleeping
                    : k == "crumple_momentum" ? &p.crumple_momentum
                    : k == "bimetal" ? &p.bimetal
+                   : k == "self_collision" ? &p.self_collision
                    : k == "anisotropic_curl" ? &p.anisotropic_curl : nullptr;
     int* ifield = k == "substeps"            ? &p.substeps
                   : k == "max_substeps"      ? &p.max_substeps
@@ -103,6 +105,7 @@ py::dict params_dict(const DynamicsParams& p) {
                   "gravity"_a = py::make_tuple(p.gravity.x(), p.gravity.y(), p.gravity.z()),
                   "buoyancy"_a = p.buoyancy, "wind_drag"_a = p.wind_drag,
                   "has_floor"_a = p.has_floor, "floor_z"_a = p.floor_z, "friction"_a = p.friction,
+                  "self_collision"_a = p.self_collision, "self_distance"_a = p.self_distance,
                   "integrator"_a = names[int(p.integrator)], "crumple_gain"_a = p.crumple_gain,
                   "plasticity"_a = p.plasticity, "crumple_momentum"_a = p.crumple_momentum,
                   "bimetal"_a = p.bimetal, "anisotropic_curl"_a = p.anisotropic_curl,

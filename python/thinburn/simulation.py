@@ -41,6 +41,7 @@ MAX_RUN_STEPS = 10_000_000
 # validate them and name the field in their errors). See docs/dynamics.md, docs/particles.md,
 # docs/bending.md for units and meanings.
 DYNAMICS_KEYS = ("k_thickness", "k_transverse", "stiffness_unit", "flexural_rigidity", "buoyancy", "wind_drag", "friction",
+                 "self_collision", "self_distance",
                  "crumple_gain", "plasticity", "crumple_momentum", "bimetal", "anisotropic_curl", "sleep_speed", "sleeping", "substeps", "max_substeps",
                  "safety", "max_stretch", "cg_tolerance", "cg_max_iterations", "gravity",
                  "preconditioner", "ldlt_max_vertices", "refactor_iterations", "wake_hold")
