@@ -1,0 +1,182 @@
+"""Soft cloth in real Blender, as an artist sets it up (issue #12, item 1): bake, render, measure.
+
+    python scripts/render_drape.py [--scenes drape curtain] [--width 320] [--samples 16]
+
+``drape``: a 40 cm cloth (preset Cloth, Motion Detail 16) 2 cm above a UV sphere (r = 10 cm,
+Blender's Collision modifier) that stands on a table, lit at a corner from frame 1, so that it
+burns while it drapes. ``curtain``: a 30 x 40 cm curtain (preset Curtain) pinned along its top
+(vertex group "top", Pin Group), its hem 10 cm above a table, lit at the middle of its hem.
+Each is baked with the add-on from this checkout (bpy as a module, throwaway user folders, as
+tests/blender does), rendered in Cycles at the --render frames, and measured from the cache:
+the lowest and highest rim height, the cache vertices inside the sphere, the pinned vertices'
+largest motion, the largest edge strain. Writes docs/images/drape_<scene>_<frame>.png.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import shutil
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from bench_blender import ADDON_NAME, ROOT, enable_addon  # scripts/ is on the path when a script runs
+from render_shells import camera_and_world
+from walkthrough import _material
+
+sys.path.insert(0, str(ROOT / "tests" / "blender"))
+import blender_helpers as H  # noqa: E402  (the scene builders the tests use)
+
+R, CENTRE = 0.1, (0.0, 0.0, 0.1)  # the sphere stands on the table (z = 0)
+
+
+def _common(sheet, table, args, material):
+    s = H.setup_bake(sheet, frames=args.frames, cells=args.cells, cache_dir=args.cache, floor=False)
+    s.threads = 0
+    s.material = material
+    s.lattice = args.lattice
+    s.floor_mode, s.floor_object = "OBJECT", table
+    s.mat_V0 = args.v0
+    s.flame_intensity, s.flame_temperature = 2.0, 1700.0  # as render_shells.py's pictures
+    return s
+
+
+def drape(args):
+    """(sheet, camera, measure(rest, world frames) -> dict)."""
+    import bpy
+    table = H.make_box_table(top=0.0, size=1.2)
+    table.data.materials.append(_material("Table", (0.12, 0.08, 0.05)))
+    sphere = H.make_uv_sphere(radius=R, segments=64, rings=32, centre=CENTRE)
+    bpy.ops.object.shade_smooth()
+    sphere.data.materials.append(_material("Ball", (0.25, 0.32, 0.45)))
+    sphere.modifiers.new("Collision", "COLLISION")
+    sphere.collision.cloth_friction = 50.0   # Coulomb 0.5 (docs/blender.md)
+    sphere.collision.thickness_outer = 0.001
+    n = args.n
+    top = CENTRE[2] + R
+    sheet = H.make_sheet(name="Cloth", n=n, size=0.4, z=top + 0.02)
+    sheet.data.materials.append(_material("Cotton", (0.7, 0.62, 0.5)))
+    bpy.context.view_layer.objects.active = sheet
+    bpy.ops.object.shade_smooth()
+    _common(sheet, table, args, "cloth")
+    H.make_igniter(sheet, (0.2, 0.2, top + 0.02), lit_from=1, radius=args.radius)
+    # Facets of a 64 x 32 UV sphere lie at most R (1 - cos(180/64 deg)) = 0.12 mm inside the
+    # true sphere (its rings: 180/32 deg, 0.48 mm): "inside" is nearer the centre than R - 0.5 mm.
+    facet = R * (1.0 - math.cos(math.pi / 32))
+
+    def measure(rest, world):
+        rim = np.max(np.abs(rest[:, :2]), axis=1) > 0.2 - 1e-6
+        r = np.linalg.norm(world - np.asarray(CENTRE), axis=2)
+        middle = int(np.argmin(np.linalg.norm(rest[:, :2], axis=1)))
+        corners = [0, n - 1, n * n - n, n * n - 1]  # (-x -y), (+x -y), (-x +y), (+x +y)
+        return {"rim_lowest_m_last": float(world[-1, rim, 2].min()),
+                "rim_highest_m_last": float(world[-1, rim, 2].max()),
+                "corners_z_m_last": [round(float(world[-1, k, 2]), 4) for k in corners],
+                "rim_highest_m_per_12_frames": [round(float(f[rim, 2].max()), 4) for f in world[11::12]],
+                "middle_above_top_mm_last": round(1e3 * float(world[-1, middle, 2] - top), 2),
+                "nearest_to_centre_minus_R_mm": round(1e3 * float(r.min() - R), 2),
+                "inside_sphere_vertex_frames": int(np.count_nonzero(r < R - facet)),
+                "below_table_vertex_frames": int(np.count_nonzero(world[..., 2] < 0.0))}
+    return sheet, ((0.42, -0.5, 0.42), (0.0, 0.0, 0.1)), measure
+
+
+def curtain(args):
+    table = H.make_box_table(top=0.0, size=1.2)
+    table.data.materials.append(_material("Table", (0.12, 0.08, 0.05)))
+    nx, nz = 49, 65
+    xs = np.linspace(-0.15, 0.15, nx)
+    zs = np.linspace(0.10, 0.50, nz)
+    verts = [(x, 0.0, z) for z in zs for x in xs]
+    faces = [(j * nx + i, j * nx + i + 1, (j + 1) * nx + i + 1, (j + 1) * nx + i)
+             for j in range(nz - 1) for i in range(nx - 1)]
+    sheet = H.link_mesh("Curtain", verts, faces)
+    sheet.data.materials.append(_material("Linen", (0.75, 0.7, 0.62)))
+    pinned = list(range(nx * (nz - 1), nx * nz))
+    sheet.vertex_groups.new(name="top").add(pinned, 1.0, "REPLACE")
+    s = _common(sheet, table, args, "curtain")
+    s.pin_group = "top"
+    H.make_igniter(sheet, (0.0, 0.0, 0.10), lit_from=1, radius=args.radius)
+    edges = H.mesh_edges(sheet)
+
+    def measure(rest, world):
+        hem = np.arange(nx)
+        strain = H.edge_strain(rest, world, edges)
+        return {"pinned_largest_motion_mm": round(1e3 * float(np.linalg.norm(
+                    world[:, pinned] - rest[pinned], axis=2).max()), 3),
+                "hem_lowest_m_last": float(world[-1, hem, 2].min()),
+                "largest_off_plane_mm": round(1e3 * float(np.abs(world[..., 1]).max()), 2),
+                "max_edge_strain": round(float(strain.max()), 4),
+                "max_edge_strain_frame": int(np.argmax(strain)) + 1}
+    return sheet, ((0.35, -0.7, 0.4), (0.0, 0.0, 0.28)), measure
+
+
+SCENES = {"drape": drape, "curtain": curtain}
+
+
+def bake_and_measure(name, args):
+    import bpy
+    addon = sys.modules[ADDON_NAME]
+    sheet, cam, measure = SCENES[name](args)
+    rest = H.world_vertices(sheet)
+    t0 = time.perf_counter()
+    job = addon.job.BakeJob(bpy.context, sheet)
+    job.run()
+    info = {"scene": name, "frames": args.frames, "cells": args.cells, "lattice": args.lattice,
+            "vertices": len(rest), "bake_s": round(time.perf_counter() - t0, 1),
+            "message": job.message, "warnings": list(job.warnings),
+            "colliders": list(getattr(job, "colliders", []))}
+    _, frames = addon.cache.read_pc2(H.cache_file(args.cache, sheet.name + ".pc2"))
+    mw = np.array(sheet.matrix_world, dtype=np.float64)
+    world = frames.astype(np.float64) @ mw[:3, :3].T + mw[:3, 3]
+    ignite = H.point_attribute(sheet, "thinburn_ignite_time")
+    info["ignited"] = int(np.count_nonzero(ignite < 1e8))
+    info.update(measure(rest, world))
+    print(json.dumps(info, indent=1), flush=True)
+    return cam
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--scenes", nargs="+", default=list(SCENES), choices=list(SCENES))
+    ap.add_argument("--out", type=Path, default=ROOT / "docs" / "images")
+    ap.add_argument("--width", type=int, default=320)
+    ap.add_argument("--samples", type=int, default=16)
+    ap.add_argument("--frames", type=int, default=144, help="frames to bake (24 fps)")
+    ap.add_argument("--render", type=int, nargs="*", default=[12, 48, 144], help="frames to render")
+    ap.add_argument("--cells", type=int, default=48, help="Fire Detail")
+    ap.add_argument("--lattice", type=int, default=16, help="Motion Detail")
+    ap.add_argument("--n", type=int, default=61, help="the drape's cloth: n x n vertices")
+    ap.add_argument("--v0", type=float, default=25.0, help="spread speed, mm/s (paper: 3.5)")
+    ap.add_argument("--suffix", default="", help="added to the pictures' names (drape_<scene><suffix>_<frame>)")
+    ap.add_argument("--radius", type=float, default=0.02, help="igniter radius, m")
+    args = ap.parse_args(argv)
+    args.out.mkdir(parents=True, exist_ok=True)
+    work = Path(tempfile.mkdtemp(prefix="thinburn-drape-"))
+    args.cache = work / "cache"
+    try:
+        enable_addon(work / "user")
+        import bpy
+        for name in args.scenes:
+            bpy.ops.wm.read_homefile(use_empty=True)
+            cam = bake_and_measure(name, args)
+            if not args.render:
+                continue
+            camera_and_world(cam, args.width, args.samples)
+            for frame in args.render:
+                bpy.context.scene.frame_set(frame)
+                path = args.out / f"drape_{name}{args.suffix}_{frame:03d}.png"
+                bpy.context.scene.render.filepath = str(path)
+                t0 = time.perf_counter()
+                bpy.ops.render.render(write_still=True)
+                print(f"{path} ({time.perf_counter() - t0:.1f} s)", flush=True)
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
