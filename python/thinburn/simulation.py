@@ -515,7 +515,7 @@ class Simulation:
     def phase_seconds(self) -> dict:
         """Wall-clock seconds spent in each phase of the steps and ``vertex_positions`` calls
         since the simulation was built: ``fire_front``, ``cells``, ``sources``, ``particles``,
-        ``heat``, ``dynamics``, ``mesh`` (a profile; scripts/bench_film.py, docs/bench.md)."""
+        ``heat``, ``dynamics``, ``mesh`` (a profile; benchmarks/bench_film.py, docs/bench.md)."""
         return dict(self._sim.phase_seconds())
 
     def _require_shell(self, what: str) -> int:

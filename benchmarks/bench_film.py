@@ -8,7 +8,7 @@ frame loop is repeated below, so the script stands alone); each frame keeps its 
 over --repeat runs on fresh simulations (the simulation is deterministic: frame k does the
 same work in every run), the thread counts taken in turn.
 
-    python scripts/bench_film.py [--cells 512] [--side 1000] [--frames 48] [--start 1 60]
+    python -m benchmarks.bench_film [--cells 512] [--side 1000] [--frames 48] [--start 1 60]
                                  [--threads 1 2] [--repeat 2] [--reuse-output] [--out film.json]
 
 Each --start is a window: that many simulated seconds are stepped untimed first (the fire
@@ -26,31 +26,10 @@ import numpy as np
 import thinburn
 from thinburn.scenes import rect_sheet
 
+from benchmarks.perf import STAT_KEYS, run_frames
+
 SHEET = 1.0  # m, the sheet's side
 DT = 1 / 24
-STAT_KEYS = ("front_active", "burning", "fringe", "awake", "particles", "cg_iterations")
-
-
-# The frame loop of python -m thinburn.bench (its _bench_perf), kept here so that the script
-# stands alone wherever the bench package goes.
-def run_frames(sim, frames: int, warmup: int):
-    """Step `warmup` frames untimed, then time `frames` frames of step + vertex_positions:
-    (step ms, vertex_positions ms, {stat: per frame}), sim.stats() read after each timer."""
-    for _ in range(warmup):
-        sim.step(DT)
-    step_ms, pos_ms = np.empty(frames), np.empty(frames)
-    stats = {k: np.zeros(frames) for k in STAT_KEYS}
-    for f in range(frames):
-        t0 = time.perf_counter()
-        sim.step(DT)
-        t1 = time.perf_counter()
-        sim.vertex_positions()
-        t2 = time.perf_counter()
-        step_ms[f], pos_ms[f] = 1e3 * (t1 - t0), 1e3 * (t2 - t1)
-        st = sim.stats()
-        for k in STAT_KEYS:
-            stats[k][f] = float(st.get(k, 0))
-    return step_ms, pos_ms, stats
 
 
 def interleaved_best_frames(makers, frames: int, warmup: int, repeat: int):
