@@ -26,8 +26,11 @@ MATERIAL_FIELDS = {
     "C_damping": ("Damping", "Damping of the sheet's motion (Table 1, eq. 12)", 0.0, 100.0),
     "K_structure": ("Stretch Stiffness", "How hard the sheet resists stretching (the lattice's structure springs, Table 1)", 0.0, 100.0),
     "K_shear": ("Shear Stiffness", "Stiffness of the lattice's shear springs (Table 1)", 0.0, 100.0),
-    "K_flex": ("Bend Stiffness", "How hard the sheet resists bending (the lattice's flexion springs, Table 1)", 0.0, 100.0),
+    "K_flex": ("Flex Stiffness", "Stiffness of the lattice's two-apart springs (Table 1); with a Bending Rigidity set, the sheet bends with that instead", 0.0, 100.0),
+    "flexural_rigidity": ("Bending Rigidity", "The sheet's own bending stiffness in µN·m (a plate's E·t³/12): cloth 5, silk 3, curtain 20. 0 bends with the lattice's own layers, about 100× a real paper's (the paper preset: a soft paper lifts off its table in a breeze)", 0.0, 1e6),
 }
+# Fields shown in another unit than the core's: the core's value is the panel's times this.
+MATERIAL_UNITS = {"flexural_rigidity": 1e-6}  # µN·m in the panel, N·m in the core
 
 # Motion parameters read every frame (keyframeable) and passed to Simulation.set_dynamics
 # when they change; defaults equal the core's (a test checks). Gravity comes from the scene.
@@ -67,7 +70,7 @@ def load_preset(settings, name: str) -> None:
     preset = thinburn.MATERIALS[name]
     for field in MATERIAL_FIELDS:
         if hasattr(preset, field):
-            setattr(settings, "mat_" + field, getattr(preset, field))
+            setattr(settings, "mat_" + field, getattr(preset, field) / MATERIAL_UNITS.get(field, 1.0))
 
 
 def _on_material(self, context):
@@ -77,7 +80,8 @@ def _on_material(self, context):
 def build_material(settings):
     """The thinburn.Material the bake uses: the preset with the panel's field values."""
     preset = thinburn.MATERIALS[settings.material]
-    changes = {f: getattr(settings, "mat_" + f) for f in MATERIAL_FIELDS if hasattr(preset, f)}
+    changes = {f: getattr(settings, "mat_" + f) * MATERIAL_UNITS.get(f, 1.0)
+               for f in MATERIAL_FIELDS if hasattr(preset, f)}
     return preset.with_(**changes)
 
 
@@ -96,7 +100,8 @@ def _field_props():
     default = thinburn.MATERIALS["paper"]
     for field, (label, desc, lo, hi) in MATERIAL_FIELDS.items():
         props["mat_" + field] = FloatProperty(
-            name=label, description=desc, default=float(getattr(default, field, lo)),
+            name=label, description=desc,
+            default=float(getattr(default, field, lo)) / MATERIAL_UNITS.get(field, 1.0),
             min=lo, soft_max=hi, options=STATIC)
     for key, (label, desc, value, lo, hi) in MODEL_PARAMS.items():
         props[key] = FloatProperty(name=label, description=desc, default=value, min=lo, max=hi,

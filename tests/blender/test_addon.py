@@ -47,9 +47,13 @@ def test_material_preset_fills_the_fields_and_reaches_the_core(addon):
     cloth = thinburn.MATERIALS["cloth"]
     assert obj.thinburn.mat_V0 == pytest.approx(cloth.V0)
     assert obj.thinburn.mat_burn_duration == pytest.approx(cloth.burn_duration)
+    # Bending Rigidity shows µN·m: the cloth's 5e-6 N m is 5 in the panel.
+    assert obj.thinburn.mat_flexural_rigidity == pytest.approx(cloth.flexural_rigidity * 1e6, rel=1e-6)
     obj.thinburn.mat_V0 = 7.0
+    obj.thinburn.mat_flexural_rigidity = 60.0
     built = addon.properties.build_material(obj.thinburn)
     assert built.V0 == pytest.approx(7.0) and built.K_flex == pytest.approx(cloth.K_flex)
+    assert built.flexural_rigidity == pytest.approx(6e-5, rel=1e-6)
 
 
 def test_model_parameter_defaults_match_the_core(addon):
