@@ -130,7 +130,8 @@ class CoreWorker(threading.Thread):
             lit += sim.ignite_near(points, radius=radius, time=time)
         if task.painted is not None:
             lit += sim.ignite_map(task.painted, time=task.index * self._dt)
-        positions = np.array(sim.vertex_positions(), dtype=np.float64, copy=True)
+        # A fresh array per frame (the main thread keeps it), written by the core directly.
+        positions = sim.vertex_positions(out=np.empty((sim.n_vertices, 3)))
         particles = None
         if self._want_particles:
             pts, temps = sim.particles()
