@@ -26,37 +26,10 @@ import numpy as np
 import thinburn
 from thinburn.scenes import rect_sheet
 
-from benchmarks.perf import STAT_KEYS, run_frames
+from benchmarks.perf import frame_summary, interleaved_best_frames
 
 SHEET = 1.0  # m, the sheet's side
 DT = 1 / 24
-
-
-def interleaved_best_frames(makers, frames: int, warmup: int, repeat: int):
-    """run_frames on fresh simulations, the thread counts in turn (1, 2, 1, 2, ...), each frame
-    keeping its fastest time: {threads: (step ms, vertex_positions ms, stats of run 1, sim)}."""
-    best = {}
-    for _ in range(max(1, repeat)):
-        for threads, make in makers.items():
-            sim = make()
-            step_ms, pos_ms, stats = run_frames(sim, frames, warmup)
-            if threads in best:
-                b = best[threads]
-                step_ms, pos_ms, stats = np.minimum(b[0], step_ms), np.minimum(b[1], pos_ms), b[2]
-            best[threads] = (step_ms, pos_ms, stats, sim)
-    return best
-
-
-def frame_summary(step_ms, pos_ms, stats) -> dict:
-    """fps = frames / total time; mean and median frame; the vertex_positions share; the
-    active counts' means."""
-    ms = step_ms + pos_ms
-    secs = float(ms.sum()) / 1e3
-    out = dict(frames=int(len(ms)), seconds=secs, ms_per_frame=float(ms.mean()),
-               median_ms=float(np.median(ms)), frames_per_second=len(ms) / secs,
-               positions_ms=float(pos_ms.mean()))
-    out.update({k: float(v.mean()) for k, v in stats.items()})
-    return out
 
 
 def film_mesh(side: int):

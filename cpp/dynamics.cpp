@@ -395,13 +395,12 @@ void LatticeDynamics::add_membrane() {
     const double len = (r.row(b) - r.row(a)).norm();
     rest_len_.push_back(len);
     base_len_.push_back(len);
-    spring_scale_.push_back(0.5 * (strength_(a) + strength_(b)));
   }
   add_spring_geometry();
   membrane_->link(sa_, sb_, r, C_);
   build_incidence();
   factor_ = std::make_unique<Factor>();  // the pattern gained blocks
-  refresh_membrane();
+  refresh_spring_scale();
   std::fill(awake_.begin(), awake_.end(), 1);
 }
 
@@ -438,7 +437,13 @@ void LatticeDynamics::set_strength(const Eigen::VectorXd& s) {
   for (int v = 0; v < n_; ++v)
     if (s(v) != strength_(v)) awake_[v] = 1;
   strength_ = s;
-  for (std::size_t q = 0; q < sa_.size(); ++q) spring_scale_[q] = 0.5 * (s(sa_[q]) + s(sb_[q]));
+  refresh_spring_scale();
+}
+
+void LatticeDynamics::refresh_spring_scale() {
+  // A spring keeps the mean strength of its two ends; the membrane springs follow theirs.
+  spring_scale_.resize(sa_.size());
+  for (std::size_t q = 0; q < sa_.size(); ++q) spring_scale_[q] = 0.5 * (strength_(sa_[q]) + strength_(sb_[q]));
   refresh_membrane();
 }
 
@@ -464,14 +469,13 @@ void LatticeDynamics::set_params(const DynamicsParams& p) {
 }
 
 LatticeDynamics::Checkpoint LatticeDynamics::checkpoint() const {
-  return Checkpoint{mass_, strength_, spring_scale_, awake_, hold_, hold_len_, vel_, accel_, wind_, grad_dir_, grad_share_,
+  return Checkpoint{mass_, strength_, awake_, hold_, hold_len_, vel_, accel_, wind_, grad_dir_, grad_share_,
                     hist_x_, hist_v_, hist_stamp_, substep_count_, hist_h_};
 }
 
 void LatticeDynamics::rollback(Checkpoint&& c) {
   mass_ = std::move(c.mass);
   strength_ = std::move(c.strength);
-  spring_scale_ = std::move(c.spring_scale);
   awake_ = std::move(c.awake);
   hold_ = std::move(c.hold);
   hold_len_ = std::move(c.hold_len);
@@ -485,9 +489,7 @@ void LatticeDynamics::rollback(Checkpoint&& c) {
   hist_stamp_ = std::move(c.hist_stamp);
   substep_count_ = c.substep_count;
   hist_h_ = c.hist_h;
-  spring_scale_.resize(sa_.size());  // a membrane added since the checkpoint: its springs' shares
-  for (std::size_t q = 0; q < sa_.size(); ++q) spring_scale_[q] = 0.5 * (strength_(sa_[q]) + strength_(sb_[q]));
-  refresh_membrane();
+  refresh_spring_scale();  // also covers a membrane added since the checkpoint
 }
 
 void LatticeDynamics::set_masses(const Eigen::VectorXd& m) {

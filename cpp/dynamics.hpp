@@ -178,7 +178,6 @@ class LatticeDynamics {
   /// step that throws restores itself: taken before a step that may throw, put back if it does.
   struct Checkpoint {
     Eigen::VectorXd mass, strength;
-    std::vector<double> spring_scale;
     std::vector<std::uint8_t> awake;
     std::vector<std::uint16_t> hold, hold_len;
     RowMatX3 vel, accel;
@@ -237,6 +236,7 @@ class LatticeDynamics {
   double target_share() const;
   void add_membrane();
   void refresh_membrane();
+  void refresh_spring_scale();
   void wake_rings(std::vector<std::uint8_t>& flag, int rings) const;
   void collect_active();
   double omega_bound(const std::vector<int>& verts) const;

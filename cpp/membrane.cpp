@@ -168,7 +168,6 @@ void Membrane::blocks(const RowMatX3& x, const std::vector<int>& slot, bool clam
 
 Eigen::Matrix3d Membrane::share(int s) const {
   Eigen::Matrix3d J = Eigen::Matrix3d::Zero();
-  if (s + 1 >= static_cast<int>(share_start_.size())) return J;
   for (int q = share_start_[s]; q < share_start_[s + 1]; ++q) J += share_w_[q] * jac_[share_elem_[q]];
   return J;
 }

@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from bench_blender import ADDON_NAME, ROOT, enable_addon  # scripts/ is on the path when a script runs
-from render_shells import camera_and_world
+from render_shells import camera_and_world, render_frames
 from walkthrough import _material
 
 sys.path.insert(0, str(ROOT / "tests" / "blender"))
@@ -166,13 +166,7 @@ def main(argv=None) -> int:
             if not args.render:
                 continue
             camera_and_world(cam, args.width, args.samples)
-            for frame in args.render:
-                bpy.context.scene.frame_set(frame)
-                path = args.out / f"drape_{name}{args.suffix}_{frame:03d}.png"
-                bpy.context.scene.render.filepath = str(path)
-                t0 = time.perf_counter()
-                bpy.ops.render.render(write_still=True)
-                print(f"{path} ({time.perf_counter() - t0:.1f} s)", flush=True)
+            render_frames(args.render, lambda frame: args.out / f"drape_{name}{args.suffix}_{frame:03d}.png")
     finally:
         shutil.rmtree(work, ignore_errors=True)
     return 0

@@ -85,6 +85,18 @@ def build(scene_name: str, args):
     return sheet, probes, cam
 
 
+def render_frames(frames, path_of):
+    """Render each frame of the scene to path_of(frame) (a Path), printing each file and its time."""
+    import bpy
+    for frame in frames:
+        bpy.context.scene.frame_set(frame)
+        path = path_of(frame)
+        bpy.context.scene.render.filepath = str(path)
+        t0 = time.perf_counter()
+        bpy.ops.render.render(write_still=True)
+        print(f"{path} ({time.perf_counter() - t0:.1f} s)", flush=True)
+
+
 def camera_and_world(cam, width: int, samples: int):
     import bpy
     import mathutils
@@ -162,13 +174,7 @@ def main(argv=None) -> int:
         if args.render:
             camera_and_world(cam, args.width, args.samples)
             name = args.name or f"blender_{args.scene}"
-            for frame in args.render:
-                bpy.context.scene.frame_set(frame)
-                path = args.out / f"{name}_{frame:03d}.png"
-                bpy.context.scene.render.filepath = str(path)
-                t0 = time.perf_counter()
-                bpy.ops.render.render(write_still=True)
-                print(f"{path} ({time.perf_counter() - t0:.1f} s)")
+            render_frames(args.render, lambda frame: args.out / f"{name}_{frame:03d}.png")
     finally:
         shutil.rmtree(user, ignore_errors=True)
     return 0

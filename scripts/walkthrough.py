@@ -18,7 +18,7 @@ import time
 from pathlib import Path
 
 from bench_blender import ROOT, enable_addon  # scripts/ is on the path when a script runs
-from render_shells import camera_and_world
+from render_shells import camera_and_world, render_frames
 
 sys.path.insert(0, str(ROOT / "tests" / "blender"))
 import blender_helpers as H  # noqa: E402  (the scene builders the tests use)
@@ -158,13 +158,7 @@ def main(argv=None) -> int:
             bpy.ops.wm.save_as_mainfile(filepath=str(work / f"{name}.blend"))
             cam = candle_curtain(args.frames) if name == "curtain" else quick_burn(name, args.frames)
             camera_and_world(cam, args.width, args.samples)
-            for frame in args.render:
-                bpy.context.scene.frame_set(frame)
-                path = args.out / f"walkthrough_{name}_{frame:03d}.png"
-                bpy.context.scene.render.filepath = str(path)
-                t0 = time.perf_counter()
-                bpy.ops.render.render(write_still=True)
-                print(f"{path} ({time.perf_counter() - t0:.1f} s)", flush=True)
+            render_frames(args.render, lambda frame: args.out / f"walkthrough_{name}_{frame:03d}.png")
     finally:
         shutil.rmtree(work, ignore_errors=True)
     return 0
