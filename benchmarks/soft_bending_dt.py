@@ -40,8 +40,8 @@ def compare(material, wind, B):
         _, x, _ = bm.motion_run(material, wind, integrator, dt, 20.0)
         errs.append(bm.relative_error(x, ref, rest))
     print(f"{material:8s} B={'preset' if B is None else f'{B:g}':7s} wind={wind} m/s  reference moved "
-          f"{moved * 1e3:9.2f} mm RMS  backward Euler {100 * errs[0]:7.2f} % (1/96 s: {100 * errs[1]:7.2f} %)  "
-          f"symplectic {100 * errs[2]:7.2f} %", flush=True)
+          f"{moved * 1e3:9.2f} mm RMS  backward Euler {100 * errs[0]:.3g} % (1/96 s: {100 * errs[1]:.3g} %)  "
+          f"symplectic {100 * errs[2]:.3g} %", flush=True)
 
 
 def main(which):

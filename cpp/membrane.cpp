@@ -48,10 +48,10 @@ Membrane::Membrane(const std::vector<int>& sa, const std::vector<int>& sb, const
     if (twin == idx.end() || kind[twin->second] != kind[s]) continue;
     carried_[s] = carried_[twin->second] = 1;
     // Flex springs span two couples (or a hinge of two control triangles): a membrane spring
-    // there would be a chord across a bent pair of cells, shorter than the arc, and resist
-    // bending at fourth order (measured: 3.6x the bending part at a 0.5 m radius with 3 cm
-    // cells). The pair keeps only its bending part; its membrane share goes to the structure
-    // springs' membrane springs (LatticeDynamics::refresh_membrane).
+    // there would be a chord across a bent pair of cells, shorter than the arc by (2L)^3 k^2 / 24
+    // even once the cells relax into a polygon, and so a bending stiffness of its own. The pair
+    // keeps only its bending part; its membrane share goes to the structure springs' membrane
+    // springs (LatticeDynamics::refresh_membrane).
     if (kind[s] == 2) continue;
     ca_.push_back(a / 2);
     cb_.push_back(b / 2);
