@@ -8,6 +8,7 @@
 #include <Eigen/Core>
 #include <climits>
 #include <cmath>
+#include <cstdint>
 #include <string>
 
 namespace thinburn::bind {
@@ -78,6 +79,23 @@ inline int to_int(const std::string& key, const pybind11::handle& h, long long l
                                 "], got " + got);
   }
   return static_cast<int>(v);
+}
+
+// An integer in [0, 2^64 - 1] (a seed): int or a numpy integer, as to_int refuses others.
+inline std::uint64_t to_uint64(const std::string& key, const pybind11::handle& h) {
+  if (!detail::is_integral(h))
+    throw pybind11::type_error(key + " must be an int, got " + detail::type_name(h));
+  pybind11::object i = pybind11::reinterpret_steal<pybind11::object>(PyNumber_Index(h.ptr()));
+  if (!i) {
+    PyErr_Clear();
+    throw pybind11::type_error(key + " must be an int, got " + detail::type_name(h));
+  }
+  const unsigned long long v = PyLong_AsUnsignedLongLong(i.ptr());
+  if (PyErr_Occurred()) {
+    PyErr_Clear();
+    throw pybind11::value_error(key + " must be in [0, 2^64 - 1], got " + pybind11::str(i).cast<std::string>());
+  }
+  return v;
 }
 
 // A bool (Python or numpy); 0/1 integers are refused so a typo of a number is not read as a flag.
