@@ -9,15 +9,15 @@ const std::vector<param::Field<BendingParams>>& BendingParams::fields() {
   using P = BendingParams;
   using namespace param;
   static const std::vector<Field<P>> table = {
-      real("ct", &P::ct, at_least(0), "eq 2: heat units per (K s / m^2)"),
-      real("cp", &P::cp, at_least(0), "eq 3 (Table 1 Cp): pyrolysis per metre^-1"),
-      real("alpha", &P::alpha, unbounded(), "eq 6: radians per unit heat difference"),
-      real("beta", &P::beta, unbounded(), "eq 6: radians per unit pyrolysis difference"),
-      real("d_min", &P::d_min, above(0), "m: guards d -> 0 in eqs 2 and 3"),
-      real("max_rotation", &P::max_rotation, at_least(0), "rad: |D| saturates smoothly here"),
+      field("ct", &P::ct, at_least(0), "eq 2: heat units per (K s / m^2)"),
+      field("cp", &P::cp, at_least(0), "eq 3 (Table 1 Cp): pyrolysis per metre^-1"),
+      field("alpha", &P::alpha, "eq 6: radians per unit heat difference"),
+      field("beta", &P::beta, "eq 6: radians per unit pyrolysis difference"),
+      field("d_min", &P::d_min, above(0), "m: guards d -> 0 in eqs 2 and 3"),
+      field("max_rotation", &P::max_rotation, at_least(0), "rad: |D| saturates smoothly here"),
       // The keywords name the kernel sums' options after what they sum.
-      real("heat_tolerance", &P::tolerance, within(0, 1, true, true), "relative error bound of the fast kernel sums"),
-      flag("heat_fast", &P::fast, "octree sums (false: the direct all-pairs reference)"),
+      field("heat_tolerance", &P::tolerance, within(0, 1, true, true), "relative error bound of the fast kernel sums"),
+      field("heat_fast", &P::fast, "octree sums (false: the direct all-pairs reference)"),
   };
   return table;
 }

@@ -13,6 +13,7 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 namespace thinburn::param {
@@ -90,58 +91,47 @@ struct Field {
   std::function<void(P&, int)> set_choice;
 };
 
-namespace detail {
-template <class P>
-Field<P> field(const char* name, Kind kind, const char* doc, Bounds b = {}, const char* hint = "") {
+/// @brief A field of a number, a flag, a seed or a vector, its kind read from the member's type.
+template <class P, class T>
+Field<P> field(const char* name, T P::*m, Bounds b, const char* doc, const char* hint = "") {
   Field<P> f;
   f.name = name;
-  f.kind = kind;
   f.doc = doc;
   f.bounds = b;
   f.hint = hint;
-  return f;
-}
-}  // namespace detail
-
-template <class P>
-Field<P> real(const char* name, double P::*m, Bounds b, const char* doc, const char* hint = "") {
-  Field<P> f = detail::field<P>(name, Kind::Real, doc, b, hint);
-  f.real = m;
-  return f;
-}
-
-template <class P>
-Field<P> integer(const char* name, int P::*m, Bounds b, const char* doc, const char* hint = "") {
-  Field<P> f = detail::field<P>(name, Kind::Int, doc, b, hint);
-  f.integer = m;
-  return f;
-}
-
-template <class P>
-Field<P> seed(const char* name, std::uint64_t P::*m, const char* doc) {
-  Field<P> f = detail::field<P>(name, Kind::Seed, doc);
-  f.seed = m;
+  if constexpr (std::is_same_v<T, double>) {
+    f.kind = Kind::Real;
+    f.real = m;
+  } else if constexpr (std::is_same_v<T, int>) {
+    f.kind = Kind::Int;
+    f.integer = m;
+  } else if constexpr (std::is_same_v<T, std::uint64_t>) {
+    f.kind = Kind::Seed;
+    f.seed = m;
+  } else if constexpr (std::is_same_v<T, bool>) {
+    f.kind = Kind::Flag;
+    f.flag = m;
+  } else {
+    static_assert(std::is_same_v<T, Eigen::Vector3d>, "a field is a double, int, uint64, bool or Vector3d");
+    f.kind = Kind::Vector;
+    f.vector = m;
+  }
   return f;
 }
 
-template <class P>
-Field<P> flag(const char* name, bool P::*m, const char* doc) {
-  Field<P> f = detail::field<P>(name, Kind::Flag, doc);
-  f.flag = m;
-  return f;
-}
-
-template <class P>
-Field<P> vector(const char* name, Eigen::Vector3d P::*m, const char* doc) {
-  Field<P> f = detail::field<P>(name, Kind::Vector, doc);
-  f.vector = m;
-  return f;
+/// @brief The same without bounds (flags, seeds, vectors, unbounded numbers).
+template <class P, class T>
+Field<P> field(const char* name, T P::*m, const char* doc) {
+  return field(name, m, unbounded(), doc);
 }
 
 /// @brief An enum field; names[i] is the name of the value E(i).
 template <class P, class E>
 Field<P> choice(const char* name, E P::*m, const char* type, std::vector<const char*> names, const char* doc) {
-  Field<P> f = detail::field<P>(name, Kind::Choice, doc);
+  Field<P> f;
+  f.name = name;
+  f.kind = Kind::Choice;
+  f.doc = doc;
   f.choices = std::move(names);
   f.choice_type = type;
   f.get_choice = [m](const P& p) { return static_cast<int>(p.*m); };

@@ -103,19 +103,19 @@ const std::vector<param::Field<ParticleParams>>& ParticleParams::fields() {
   using P = ParticleParams;
   using namespace param;
   static const std::vector<Field<P>> table = {
-      integer("capacity", &P::capacity, within(1, 100000000), "particles the pool holds; births beyond are dropped"),
-      real("birth_rate", &P::birth_rate, at_least(0), "particles per second per metre of fire front"),
-      real("temperature0", &P::temperature0, above(0), "K above ambient at birth"),
-      real("cooling", &P::cooling, at_least(0), "1/s: T = temperature0 exp(-cooling age)"),
-      real("lifetime", &P::lifetime, above(0), "s: the mean lifetime"),
-      real("lifetime_jitter", &P::lifetime_jitter, within(0, 1, false, true),
+      field("capacity", &P::capacity, within(1, 100000000), "particles the pool holds; births beyond are dropped"),
+      field("birth_rate", &P::birth_rate, at_least(0), "particles per second per metre of fire front"),
+      field("temperature0", &P::temperature0, above(0), "K above ambient at birth"),
+      field("cooling", &P::cooling, at_least(0), "1/s: T = temperature0 exp(-cooling age)"),
+      field("lifetime", &P::lifetime, above(0), "s: the mean lifetime"),
+      field("lifetime_jitter", &P::lifetime_jitter, within(0, 1, false, true),
            "lifetimes uniform in lifetime [1 - j, 1 + j]"),
-      real("buoyancy", &P::buoyancy, at_least(0), "m/s^2 upward at temperature0, proportional to T"),
-      real("drag", &P::drag, at_least(0), "1/s: relaxation rate of the velocity toward the wind"),
-      real("turbulence", &P::turbulence, at_least(0), "m/s: rms of each velocity component's fluctuation"),
-      real("birth_speed", &P::birth_speed, at_least(0), "m/s along the emitting side's normal"),
-      real("vertical_band", &P::vertical_band, within(0, 1), "emitters with |n.z| below this emit on both sides"),
-      param::seed("seed", &P::seed, "seed of the random stream (a Simulation's shell sets it from its own seed)"),
+      field("buoyancy", &P::buoyancy, at_least(0), "m/s^2 upward at temperature0, proportional to T"),
+      field("drag", &P::drag, at_least(0), "1/s: relaxation rate of the velocity toward the wind"),
+      field("turbulence", &P::turbulence, at_least(0), "m/s: rms of each velocity component's fluctuation"),
+      field("birth_speed", &P::birth_speed, at_least(0), "m/s along the emitting side's normal"),
+      field("vertical_band", &P::vertical_band, within(0, 1), "emitters with |n.z| below this emit on both sides"),
+      field("seed", &P::seed, "seed of the random stream (a Simulation's shell sets it from its own seed)"),
   };
   return table;
 }

@@ -39,12 +39,12 @@ const std::vector<param::Field<ShellParams>>& ShellParams::fields() {
   using P = ShellParams;
   using namespace param;
   static const std::vector<Field<P>> table = {
-      integer("lattice", &P::lattice, at_least(0), "M couples per side (0: chosen from the sheet and its cells)"),
-      real("lattice_thickness", &P::lattice_thickness, at_least(0), "m between a couple's two vertices (0: chosen)"),
-      flag("has_floor", &P::has_floor, "a horizontal floor under the sheet"),
-      real("floor_z", &P::floor_z, unbounded(), "m: the floor's height"),
-      real("ash_strength", &P::ash_strength, within(0, 1), "share of the springs' stiffness burnt sheet keeps"),
-      param::seed("seed", &P::seed, "seeds the particles' random stream"),
+      field("lattice", &P::lattice, at_least(0), "M couples per side (0: chosen from the sheet and its cells)"),
+      field("lattice_thickness", &P::lattice_thickness, at_least(0), "m between a couple's two vertices (0: chosen)"),
+      field("has_floor", &P::has_floor, "a horizontal floor under the sheet"),
+      field("floor_z", &P::floor_z, "m: the floor's height"),
+      field("ash_strength", &P::ash_strength, within(0, 1), "share of the springs' stiffness burnt sheet keeps"),
+      field("seed", &P::seed, "seeds the particles' random stream"),
   };
   return table;
 }

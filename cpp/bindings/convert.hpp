@@ -33,6 +33,17 @@ inline bool is_text(const pybind11::handle& h) {
 inline bool is_integral(const pybind11::handle& h) {
   return !is_bool_like(h) && !is_text(h) && PyIndex_Check(h.ptr());
 }
+
+// An integer object in Python's sense as a Python int; a TypeError naming key for any other.
+inline pybind11::object as_index(const std::string& key, const pybind11::handle& h) {
+  if (!is_integral(h)) throw pybind11::type_error(key + " must be an int, got " + type_name(h));
+  pybind11::object i = pybind11::reinterpret_steal<pybind11::object>(PyNumber_Index(h.ptr()));
+  if (!i) {
+    PyErr_Clear();
+    throw pybind11::type_error(key + " must be an int, got " + type_name(h));
+  }
+  return i;
+}
 }  // namespace detail
 
 // The name of a keyword (keys of a parameter dict must be str).
@@ -61,13 +72,7 @@ inline double to_double(const std::string& key, const pybind11::handle& h) {
 // 2.0), bools and text are refused with a TypeError, out-of-range values with a ValueError.
 inline int to_int(const std::string& key, const pybind11::handle& h, long long lo = INT_MIN,
                   long long hi = INT_MAX) {
-  if (!detail::is_integral(h))
-    throw pybind11::type_error(key + " must be an int, got " + detail::type_name(h));
-  pybind11::object i = pybind11::reinterpret_steal<pybind11::object>(PyNumber_Index(h.ptr()));
-  if (!i) {
-    PyErr_Clear();
-    throw pybind11::type_error(key + " must be an int, got " + detail::type_name(h));
-  }
+  pybind11::object i = detail::as_index(key, h);
   int overflow = 0;
   const long long v = PyLong_AsLongLongAndOverflow(i.ptr(), &overflow);
   if (PyErr_Occurred()) PyErr_Clear();
@@ -83,13 +88,7 @@ inline int to_int(const std::string& key, const pybind11::handle& h, long long l
 
 // An integer in [0, 2^64 - 1] (a seed): int or a numpy integer, as to_int refuses others.
 inline std::uint64_t to_uint64(const std::string& key, const pybind11::handle& h) {
-  if (!detail::is_integral(h))
-    throw pybind11::type_error(key + " must be an int, got " + detail::type_name(h));
-  pybind11::object i = pybind11::reinterpret_steal<pybind11::object>(PyNumber_Index(h.ptr()));
-  if (!i) {
-    PyErr_Clear();
-    throw pybind11::type_error(key + " must be an int, got " + detail::type_name(h));
-  }
+  pybind11::object i = detail::as_index(key, h);
   const unsigned long long v = PyLong_AsUnsignedLongLong(i.ptr());
   if (PyErr_Occurred()) {
     PyErr_Clear();
