@@ -141,11 +141,12 @@ class Simulation:
           ``sleeping``, ``substeps`` (0, the default, chooses them per step; a fixed count is
           at most 10000, each one costs a sweep of the lattice), ``max_substeps`` (10000,
           at most 1e6: an explicit step that needs more raises), ``safety``, ``max_stretch``,
-          ``cg_tolerance``, ``cg_max_iterations``, ``gravity``, ``preconditioner`` of the implicit
-          solve's conjugate gradients ("auto", the default: a sparse block LDL^T factorization, kept
-          while it stays good, up to ``ldlt_max_vertices`` (600) awake lattice vertices, couple-block
-          Jacobi above; "ldlt"; "jacobi"), ``refactor_iterations``, ``wake_hold`` (steps a
-          vertex woken again soon after falling asleep stays awake, doubling per repeat);
+          ``cg_tolerance``, ``cg_velocity_tolerance``, ``cg_max_iterations``, ``gravity``,
+          ``preconditioner`` of the implicit solve's conjugate gradients ("auto", the default:
+          a sparse block LDL^T factorization, kept while it stays good, up to
+          ``ldlt_max_vertices`` (600) awake lattice vertices, couple-block Jacobi above;
+          "ldlt"; "jacobi"), ``refactor_iterations``, ``wake_hold`` (steps a vertex woken
+          again soon after falling asleep stays awake, doubling per repeat);
         * the particles, prefixed ``particle_``: ``particle_capacity``,
           ``particle_birth_rate``, ``particle_temperature0``, ``particle_cooling``,
           ``particle_lifetime``, ``particle_lifetime_jitter``, ``particle_buoyancy``,
