@@ -16,7 +16,8 @@ const std::vector<param::Field<BendingParams>>& BendingParams::fields() {
       field("d_min", &P::d_min, above(0), "m: guards d -> 0 in eqs 2 and 3"),
       field("max_rotation", &P::max_rotation, at_least(0), "rad: |D| saturates smoothly here"),
       // The keywords name the kernel sums' options after what they sum.
-      field("heat_tolerance", &P::tolerance, within(0, 1, true, true), "relative error bound of the fast kernel sums"),
+      field("heat_tolerance", &P::tolerance, within(0, 1, true, true),
+            "relative error bound of the fast kernel sums"),
       field("heat_fast", &P::fast, "octree sums (false: the direct all-pairs reference)"),
   };
   return table;
