@@ -18,14 +18,6 @@ namespace {
 constexpr int kMaxPasses = 4;
 constexpr int kRedoShare = 16;   // a step is redone when it stresses awake over 1/16 of its awake count
 constexpr int kMaxContactRounds = 8;  // solves per implicit substep while contacts are added
-constexpr double kPi = 3.14159265358979323846;
-// A couple whose D changes by this much across its spacing curls across the front only.
-constexpr double kAnisotropicTurn = 0.25;
-
-Eigen::Vector3d couple_centre(const RowMatX3& x, int c) {
-  return 0.5 * (x.row(2 * c) + x.row(2 * c + 1)).transpose();
-}
-
 void require(bool ok, const std::string& what) {
   if (!ok) throw std::invalid_argument(what);
 }
@@ -133,7 +125,8 @@ LatticeDynamics::~LatticeDynamics() = default;
 
 LatticeDynamics::LatticeDynamics(FfdLattice& lattice, const DynamicsParams& p, LatticeTopology topology)
     : lat_(lattice), p_(p), topo_(topology.couples > 0 ? std::move(topology) : grid_topology(lattice.M())),
-      C_(lattice.couples()), n_(lattice.size()), sleep_(n_, inc_, pinned_, mass_, p_),
+      C_(lattice.couples()), n_(lattice.size()), bimetal_({topo_, lat_.rest(), sa_, sb_, rest_len_, p_}),
+      sleep_(n_, inc_, pinned_, mass_, p_),
       contacts_(n_, {lat_, vel_, drift_, mass_, active_, slot_, inc_, kind_, rest_len_, p_}),
       solver_({active_, slot_, inc_, vert_spring_, mass_, contacts_, p_}) {
   validate(p);
@@ -157,134 +150,9 @@ LatticeDynamics::LatticeDynamics(FfdLattice& lattice, const DynamicsParams& p, L
   D_prev_ = delta_ = Eigen::VectorXd::Zero(C_);
   pinned_.assign(n_, 0);
   self_contact_ = std::make_unique<SelfContact>(topo_, lat_.rest());
-  build_bimetal();
+  bimetal_.build();
   bend_share_ = target_share();
   if (bend_share_ < 1.0) add_membrane();
-}
-
-void LatticeDynamics::build_bimetal() {
-  // Geometry of the rest lattice that the bimetal rest lengths bend: each spring joins two
-  // couples whose centres are mid_sep_ apart, at offsets +-(half the couple's thickness) from the
-  // mid-surface (+ toward the top).
-  const RowMatX3& r = lat_.rest();
-  const int C = topo_.couples;
-  base_len_ = rest_len_;
-  mid_sep_.clear();
-  off_a_.clear();
-  off_b_.clear();
-  add_spring_geometry();
-  grad_dir_ = RowMatX3::Zero(C, 3);
-  grad_share_ = Eigen::VectorXd::Zero(C);
-  changed_.assign(C, 0);
-  couple_spacing_ = Eigen::VectorXd::Zero(C);
-  for (int c = 0; c < C; ++c) {
-    double sum = 0.0;
-    int k = 0;
-    for (int q = topo_.nbr_offset[c]; q < topo_.nbr_offset[c + 1]; ++q, ++k)
-      sum += (couple_centre(r, topo_.nbr_index[q]) - couple_centre(r, c)).norm();
-    couple_spacing_(c) = k > 0 ? sum / k : 1.0;
-  }
-}
-
-void LatticeDynamics::add_spring_geometry() {
-  // mid_sep_, off_a_, off_b_ of the springs from the first not yet measured to the last.
-  const RowMatX3& r = lat_.rest();
-  auto offset = [&](int v) {
-    const double half = 0.5 * (r.row(v | 1) - r.row(v & ~1)).norm();
-    return (v & 1) ? half : -half;
-  };
-  for (std::size_t s = mid_sep_.size(); s < sa_.size(); ++s) {
-    mid_sep_.push_back((couple_centre(r, sb_[s] / 2) - couple_centre(r, sa_[s] / 2)).norm());
-    off_a_.push_back(offset(sa_[s]));
-    off_b_.push_back(offset(sb_[s]));
-  }
-}
-
-static double chord_ratio(double kappa, double sep) {
-  // Chord over arc of a mid-surface bent to curvature kappa over arc length sep, as
-  // bimetal_ratio's with both offsets 0 (and its half-turn clamp).
-  if (!(sep > 0.0)) return 1.0;
-  const double half = 0.5 * std::clamp(kappa, -kPi / sep, kPi / sep) * sep;
-  return std::abs(half) > 1e-12 ? std::sin(half) / half : 1.0;
-}
-
-double LatticeDynamics::bimetal_ratio(int s, double kappa) const {
-  // Distance between two points of a sheet bent to curvature kappa (centre of curvature on the
-  // top side), at mid-surface arc length s apart and offsets oa, ob along the normals:
-  // d^2 = (oa - ob)^2 + (1 - kappa oa)(1 - kappa ob) chord^2, chord = 2 sin(kappa s / 2) / kappa.
-  // The top face (o > 0) shortens by kappa o per unit length, the bottom lengthens: a bimetal
-  // strip. Returned relative to the flat sheet, so that the rest lattice's own shape is kept.
-  const double sep = mid_sep_[s], oa = off_a_[s], ob = off_b_[s];
-  const double d0 = std::sqrt((oa - ob) * (oa - ob) + sep * sep);
-  if (!(d0 > 0.0) || sep == 0.0) return 1.0;
-  // At most a half turn between the couples, and the layers stay on their side of the centre.
-  const double omax = std::max(std::abs(oa), std::abs(ob));
-  double k = std::clamp(kappa, -kPi / sep, kPi / sep);
-  if (omax > 0.0) k = std::clamp(k, -0.9 / omax, 0.9 / omax);
-  const double half = 0.5 * k * sep;
-  const double chord = std::abs(half) > 1e-12 ? sep * std::sin(half) / half : sep;
-  const double d2 = (oa - ob) * (oa - ob) + (1.0 - k * oa) * (1.0 - k * ob) * chord * chord;
-  return std::sqrt(std::max(d2, 0.0)) / d0;
-}
-
-void LatticeDynamics::apply_bimetal(const Eigen::VectorXd& D, bool all) {
-  // Rest lengths are a function of D alone (not of the path), so the springs never carry the
-  // history of earlier crumples; only springs near a couple whose D changed are recomputed.
-  //
-  // The curl bends across the fire's front, not equally every way: a heated face shrinking
-  // alike in all directions wants a dome, which a sheet cannot take without stretching, so
-  // paper rolls about lines along the burning edge instead. A spring along unit direction u
-  // takes the curvature times (u . g)^2, g the direction in which D grows (a couple's D
-  // gradient); where D is flat across a couple (|grad D| spacing << kAnisotropicTurn) the
-  // factor blends to 1/2, the mean over directions.
-  const int C = topo_.couples;
-  const RowMatX3& r = lat_.rest();
-  auto centre = [&](int c) { return couple_centre(r, c); };
-  for (int c = 0; c < C; ++c) {
-    bool near = all || delta_(c) != 0.0;
-    for (int q = topo_.nbr_offset[c]; q < topo_.nbr_offset[c + 1] && !near; ++q) near = delta_(topo_.nbr_index[q]) != 0.0;
-    changed_[c] = near;
-    if (!near) continue;
-    Eigen::Vector3d g = Eigen::Vector3d::Zero();
-    for (int q = topo_.nbr_offset[c]; q < topo_.nbr_offset[c + 1]; ++q) {
-      const int o = topo_.nbr_index[q];
-      const Eigen::Vector3d e = centre(o) - centre(c);
-      const double l2 = e.squaredNorm();
-      if (l2 > 0) g += (D(o) - D(c)) * e / l2;
-    }
-    const double k = topo_.nbr_offset[c + 1] - topo_.nbr_offset[c];
-    const double slope = k > 0 ? 2.0 * g.norm() / k : 0.0;  // |grad D| (rad/m), averaged over axes
-    grad_share_(c) = std::min(1.0, slope * couple_spacing_(c) / kAnisotropicTurn);
-    grad_dir_.row(c) = g.norm() > 0 ? Eigen::RowVector3d(g.normalized().transpose()) : Eigen::RowVector3d::Zero();
-  }
-  auto factor = [&](int c, const Eigen::Vector3d& u) {
-    const double along = u.dot(grad_dir_.row(c).transpose());
-    return grad_share_(c) * along * along + (1.0 - grad_share_(c)) * 0.5;
-  };
-  // The curvature between two couples: their mean D over spacing, along the front.
-  auto curvature = [&](int ca, int cb) {
-    Eigen::Vector3d u = centre(cb) - centre(ca);
-    u = u.norm() > 0 ? Eigen::Vector3d(u.normalized()) : u;
-    const double f = p_.anisotropic_curl ? 0.5 * (factor(ca, u) + factor(cb, u)) : 1.0;
-    return 0.5 * p_.crumple_gain * f * (D(ca) / couple_spacing_(ca) + D(cb) / couple_spacing_(cb));
-  };
-  const int ns = static_cast<int>(sa_.size());
-  parallel_for(0, ns, kRowCost, [&](long s_) {
-    const int s = static_cast<int>(s_);
-    const int ca = sa_[s] / 2, cb = sb_[s] / 2;
-    if (ca == cb) return;  // a couple's own thickness spring keeps its length
-    if (!changed_[ca] && !changed_[cb]) return;
-    rest_len_[s] = base_len_[s] * bimetal_ratio(s, curvature(ca, cb));
-  });
-  if (!membrane_) return;
-  // A membrane spring lies on the mid-surface: bent, its ends are a chord of the arc apart.
-  std::vector<double>& rest = membrane_->rest();
-  parallel_for(0, membrane_->size(), kRowCost, [&](long e_) {
-    const int e = static_cast<int>(e_);
-    const int ca = membrane_->couple_a(e), cb = membrane_->couple_b(e);
-    if (!changed_[ca] && !changed_[cb]) return;
-    rest[e] = membrane_->base()[e] * chord_ratio(curvature(ca, cb), membrane_->base()[e]);
-  });
 }
 
 void LatticeDynamics::build_springs() {
@@ -346,9 +214,8 @@ void LatticeDynamics::add_membrane() {
     kind_.push_back(kPatternSpring);
     const double len = (r.row(b) - r.row(a)).norm();
     rest_len_.push_back(len);
-    base_len_.push_back(len);
   }
-  add_spring_geometry();
+  bimetal_.add_springs();
   membrane_->link(sa_, sb_, r, C_);
   build_incidence();  // the solver's pattern gained blocks
   refresh_spring_scale();
@@ -420,7 +287,7 @@ void LatticeDynamics::set_params(const DynamicsParams& p) {
 }
 
 LatticeDynamics::Checkpoint LatticeDynamics::checkpoint() const {
-  return Checkpoint{mass_, strength_, sleep_.awake(), sleep_.hold(), sleep_.hold_len(), vel_, accel_, wind_, grad_dir_, grad_share_,
+  return Checkpoint{mass_, strength_, sleep_.awake(), sleep_.hold(), sleep_.hold_len(), vel_, accel_, wind_, bimetal_.grad_dir(), bimetal_.grad_share(),
                     hist_x_, hist_v_, hist_stamp_, substep_count_, hist_h_};
 }
 
@@ -430,8 +297,7 @@ void LatticeDynamics::rollback(Checkpoint&& c) {
   sleep_.restore(std::move(c.awake), std::move(c.hold), std::move(c.hold_len));
   vel_ = std::move(c.vel);
   accel_ = std::move(c.accel);
-  grad_dir_ = std::move(c.grad_dir);
-  grad_share_ = std::move(c.grad_share);
+  bimetal_.restore(std::move(c.grad_dir), std::move(c.grad_share));
   wind_ = c.wind;
   hist_x_ = std::move(c.hist_x);
   hist_v_ = std::move(c.hist_v);
@@ -938,7 +804,7 @@ StepStats LatticeDynamics::step(double dt, const Eigen::VectorXd& D, const Eigen
     rest_save_ = rest_len_;
     if (membrane_) membrane_rest_save_ = membrane_->rest();
   }
-  if (bimetal) apply_bimetal(D, bimetal_all_);
+  if (bimetal) bimetal_.apply(D, delta_, bimetal_all_, membrane_.get());
   // What would set a vertex moving: its force less what a floor or a collider it rests on takes.
   const Sleeping::NetForce net_force = [this](int v) {
     return contacts_.supported(v, vertex_force(v, lat_.positions(), vel_));

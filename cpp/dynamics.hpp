@@ -11,6 +11,7 @@
 #include <memory>
 #include <vector>
 
+#include "bimetal.hpp"
 #include "colliders.hpp"
 #include "contact.hpp"
 #include "implicit_solver.hpp"
@@ -232,7 +233,6 @@ class LatticeDynamics {
  private:
   void build_springs();
   void build_incidence();
-  void add_spring_geometry();
   double spring_k(int s) const;
   double layer_k(int kind) const;
   double target_share() const;
@@ -251,9 +251,6 @@ class LatticeDynamics {
   void implicit_assemble(double h);
   void implicit_rhs(double h);
   void apply_plasticity();
-  void build_bimetal();
-  void apply_bimetal(const Eigen::VectorXd& D, bool all);
-  double bimetal_ratio(int s, double kappa) const;
   void remove_crumple_translation();
 
   FfdLattice& lat_;
@@ -266,13 +263,6 @@ class LatticeDynamics {
   std::vector<double> rest_len_;
   std::vector<double> spring_scale_;  // per spring: stiffness share kept (set_strength), 1 intact
   Eigen::VectorXd strength_;
-  std::vector<double> base_len_;      // rest lengths of the rest lattice (bimetal scales them)
-  std::vector<double> mid_sep_;       // per spring: rest distance between its couples' centres
-  std::vector<double> off_a_, off_b_; // per spring: its ends' offsets from the mid-surface (+ top)
-  Eigen::VectorXd couple_spacing_;    // per couple: mean rest distance to its axis neighbours
-  RowMatX3 grad_dir_;                 // per couple: unit direction in which D grows (rest frame)
-  Eigen::VectorXd grad_share_;        // per couple: how much of the curl follows it (0: isotropic)
-  std::vector<std::uint8_t> changed_; // per couple: its springs' rest lengths are recomputed this step
   bool bimetal_all_ = true;           // the next bimetal step recomputes every spring
   SpringIncidence inc_;
   std::unique_ptr<Membrane> membrane_;  // null while the layers bend as the lattice's own
@@ -298,6 +288,7 @@ class LatticeDynamics {
   std::vector<double> rest_save_;
   std::unique_ptr<SelfContact> self_contact_;  // after each substep, as apply_colliders
   // The concerns split off, in this order (each views the members above and those before it).
+  Bimetal bimetal_;                 // the curl's rest lengths
   Sleeping sleep_;                  // who is awake; the active set
   const std::vector<int>& active_ = sleep_.active();  // active vertices, in index order
   const std::vector<int>& slot_ = sleep_.slot();      // per vertex: position in active_ or -1

@@ -98,6 +98,11 @@ struct SpringIncidence {
   std::vector<int> start, spring, other;
 };
 
+/// @brief Centre of couple c (the mean of its two vertices' rows in x).
+inline Eigen::Vector3d couple_centre(const RowMatX3& x, int c) {
+  return 0.5 * (x.row(2 * c) + x.row(2 * c + 1)).transpose();
+}
+
 /// Work of one item of a loop over the lattice, in kParallelWork's units (threads.hpp): a
 /// vertex's or a spring's row of forces, Jacobian or CG product is about 32. So a loop over
 /// fewer than about 1000 vertices stays on one thread.
