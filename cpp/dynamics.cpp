@@ -660,14 +660,22 @@ void LatticeDynamics::implicit_rhs(double h) {
   // b = h (f + h K w), w = v + substep drift: K w is the force change along the motion.
   const ImplicitSolver::Buffers B = solver_.buffers();
   const int na = static_cast<int>(active_.size());
+  // Each active vertex's w once, not once per spring that reads it; a vertex that does not
+  // move has no contact, so its drift is the crumple's alone.
   parallel_for(0, na, kRowCost, [&](long a_) {
     const int a = static_cast<int>(a_);
     const int v = active_[a];
-    const Eigen::Vector3d wv = vel_.row(v).transpose() + contacts_.substep_drift(v, h);
+    vec3(B.w, a) = vel_.row(v).transpose() + contacts_.substep_drift(v, h);
+  });
+  parallel_for(0, na, kRowCost, [&](long a_) {
+    const int a = static_cast<int>(a_);
+    const int v = active_[a];
+    const Eigen::Vector3d wv = vec3(B.w, a);
     Eigen::Vector3d Kw = Eigen::Vector3d::Zero();
     for (int q = inc_.start[v]; q < inc_.start[v + 1]; ++q) {
-      const int o = inc_.other[q];
-      const Eigen::Vector3d wo = vel_.row(o).transpose() + contacts_.substep_drift(o, h);
+      const int o = inc_.other[q], so = slot_[o];
+      const Eigen::Vector3d wo =
+          so >= 0 ? Eigen::Vector3d(vec3(B.w, so)) : Eigen::Vector3d(vel_.row(o).transpose() + drift_.row(o).transpose());
       Kw -= load_sym(B.jac + 6 * inc_.spring[q]) * (wv - wo);
     }
     vec3(B.b, a) = h * (vec3(B.f, a) + h * Kw);

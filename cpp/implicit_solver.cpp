@@ -61,10 +61,10 @@ ImplicitSolver::~ImplicitSolver() = default;
 void ImplicitSolver::resize(std::size_t springs, std::size_t vertices) {
   // 6 per spring (Jacobian blocks), 27 per vertex (diagonal block and the two blocks of its row
   // of the couple-block preconditioner), 3 per vertex for each of the CG vectors and the
-  // forces, and the dot-product partials.
+  // forces and the right-hand side's motion, and the dot-product partials.
   ns_ = springs;
   n_ = vertices;
-  work_.assign(6 * ns_ + 27 * n_ + 7 * 3 * n_ + (3 * n_) / kDotChunk + 2, 0.0);
+  work_.assign(6 * ns_ + 27 * n_ + 8 * 3 * n_ + (3 * n_) / kDotChunk + 2, 0.0);
   factor_ = std::make_unique<Factor>();  // the pattern may have gained blocks
 }
 
@@ -77,7 +77,7 @@ ImplicitSolver::Buffers ImplicitSolver::buffers() {
   q += 9 * n_;
   B.pinv = q;
   q += 18 * n_;
-  double** vecs[7] = {&B.f, &B.b, &B.dv, &B.r, &B.z, &B.p, &B.Ap};
+  double** vecs[8] = {&B.f, &B.b, &B.dv, &B.r, &B.z, &B.p, &B.Ap, &B.w};
   for (double** v : vecs) {
     *v = q;
     q += 3 * n_;

@@ -56,10 +56,11 @@ class ImplicitSolver {
     const DynamicsParams& p;
   };
   /// @brief Work buffers, by active slot: [jacobian blocks 6/spring (by spring) | diagonal
-  /// blocks 9/vertex | preconditioner 18/vertex | f, b, dv, r, z, p, Ap: 3/vertex each | dot
-  /// partials]. The dynamics fills jac (store_sym), diag, f and b, and the start value dv.
+  /// blocks 9/vertex | preconditioner 18/vertex | f, b, dv, r, z, p, Ap, w: 3/vertex each | dot
+  /// partials]. The dynamics fills jac (store_sym), diag, f and b (w: its scratch for b), and
+  /// the start value dv.
   struct Buffers {
-    double *jac, *diag, *pinv, *f, *b, *dv, *r, *z, *p, *Ap, *partial;
+    double *jac, *diag, *pinv, *f, *b, *dv, *r, *z, *p, *Ap, *w, *partial;
   };
 
   explicit ImplicitSolver(const View& view);
