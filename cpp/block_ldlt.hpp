@@ -1,6 +1,6 @@
 // A sparse block LDL^T factorization for systems made of 3x3 blocks (one block row and column
 // per lattice vertex): A = P^T L D L^T P with L unit block-lower-triangular and D block-diagonal
-// (dense symmetric 3x3 blocks). It serves the implicit solve's preconditioner (dynamics.cpp).
+// (dense symmetric 3x3 blocks). It serves the implicit solve's preconditioner (implicit_solver.cpp).
 //
 // Why not Eigen's SimplicialLDLT: that factorization is scalar, so every one of the 9 entries of
 // a block carries its own row index and its own scattered update; the lattice's system is

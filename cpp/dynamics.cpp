@@ -7,9 +7,7 @@
 #include <string>
 
 #include <Eigen/Geometry>
-#include <Eigen/LU>
 
-#include "block_ldlt.hpp"
 #include "crumple.hpp"
 #include "membrane.hpp"
 #include "threads.hpp"
@@ -17,25 +15,9 @@
 namespace thinburn {
 namespace {
 
-constexpr int kDotChunk = 4096;
-// Work per item, in kParallelWork's units (threads.hpp): a vertex's or a spring's row of
-// forces, Jacobian or CG product is about 32; one entry of an axpy about 11. So a loop over
-// fewer than about 1000 vertices, or an axpy over fewer than 3000 entries, stays on one thread.
-constexpr long kRowCost = 32;
-constexpr long kAxpyCost = 11;
 constexpr int kMaxPasses = 4;
 constexpr int kRedoShare = 16;   // a step is redone when it stresses awake over 1/16 of its awake count
-constexpr int kSleepShare = 10;  // vertices fall asleep only when over 1/10 of the awake set is quiet
-constexpr int kMaxHold = 10000;  // steps: the longest flicker hold (and wake_hold's upper bound)
 constexpr int kMaxContactRounds = 8;  // solves per implicit substep while contacts are added
-constexpr double kPi = 3.14159265358979323846;
-// A couple whose D changes by this much across its spacing curls across the front only.
-constexpr double kAnisotropicTurn = 0.25;
-
-Eigen::Vector3d couple_centre(const RowMatX3& x, int c) {
-  return 0.5 * (x.row(2 * c) + x.row(2 * c + 1)).transpose();
-}
-
 void require(bool ok, const std::string& what) {
   if (!ok) throw std::invalid_argument(what);
 }
@@ -157,34 +139,14 @@ void set_material(DynamicsParams& p, double k_structure, double k_shear, double 
   p.crumple_gain = kCrumpleReferenceK / k_structure;
 }
 
-// The implicit system over the active vertices, lower triangle of 3x3 blocks by columns, and its
-// sparse block LDL^T factorization (block_ldlt.hpp), the conjugate gradients' preconditioner.
-// The pattern depends only on the active set: values are refilled in the order the pattern was
-// built, and the symbolic analysis (AMD ordering, elimination tree) is redone only when the
-// active set changes. The numeric factorization is kept over substeps and steps (masses,
-// lengths and contacts change slowly), and over changes of the active set, until a solve needs
-// more than refactor_iterations iterations or the active set has moved too far from the
-// factored one.
-struct LatticeDynamics::Factor {
-  std::vector<int> active;      // the active set the pattern was built for
-  std::vector<int> slot;        // per vertex: its position in `active`, -1 if not in it
-  std::vector<int> blk_start;   // per active vertex: its column's 3x3 blocks in blk_row/blk_spring
-  std::vector<int> blk_row;     // row slot of each block; the vertex itself (diagonal) first
-  std::vector<int> blk_spring;  // the spring of an off-diagonal block, -1 on the diagonal
-  std::vector<std::pair<int, int>> sort_buf;
-  std::vector<double> values;   // 9 per block of blk_row, column-major
-  BlockLdlt ldlt;
-  Eigen::VectorXd rhs;
-  bool analysed = false;  // ldlt holds the symbolic analysis of `active`
-  bool valid = false;     // ldlt holds a numeric factorization of `active`'s system
-  bool stale = false;     // the last solve took too many iterations: refactor before the next
-};
-
 LatticeDynamics::~LatticeDynamics() = default;
 
 LatticeDynamics::LatticeDynamics(FfdLattice& lattice, const DynamicsParams& p, LatticeTopology topology)
     : lat_(lattice), p_(p), topo_(topology.couples > 0 ? std::move(topology) : grid_topology(lattice.M())),
-      C_(lattice.couples()), n_(lattice.size()) {
+      C_(lattice.couples()), n_(lattice.size()), bimetal_({topo_, lat_.rest(), sa_, sb_, rest_len_, p_}),
+      sleep_(n_, inc_, pinned_, mass_, p_),
+      contacts_(n_, {lat_, vel_, drift_, mass_, active_, slot_, inc_, kind_, rest_len_, p_}),
+      solver_({active_, slot_, inc_, vert_spring_, mass_, contacts_, p_}) {
   validate(p);
   if (topo_.couples != C_ || static_cast<int>(topo_.nbr_offset.size()) != C_ + 1)
     throw std::invalid_argument("topology: " + std::to_string(topo_.couples) + " couples, the lattice has " +
@@ -205,147 +167,10 @@ LatticeDynamics::LatticeDynamics(FfdLattice& lattice, const DynamicsParams& p, L
   area_ = heat_ = heat_prev_ = Eigen::VectorXd::Zero(n_);
   D_prev_ = delta_ = Eigen::VectorXd::Zero(C_);
   pinned_.assign(n_, 0);
-  awake_.assign(n_, 1);
-  forced_.assign(n_, 0);
-  hold_.assign(n_, 0);
-  hold_len_.assign(n_, 0);
-  slept_at_.assign(n_, std::numeric_limits<std::int64_t>::min() / 2);
-  mark_.assign(n_, 0);
-  list_.reserve(n_);
-  slot_.assign(n_, -1);
-  active_.reserve(n_);
-  contact_ = Eigen::VectorXd::Constant(n_, -1.0);
-  stick_.assign(n_, 0);
-  factor_ = std::make_unique<Factor>();
   self_contact_ = std::make_unique<SelfContact>(topo_, lat_.rest());
-  build_bimetal();
+  bimetal_.build();
   bend_share_ = target_share();
   if (bend_share_ < 1.0) add_membrane();
-}
-
-void LatticeDynamics::build_bimetal() {
-  // Geometry of the rest lattice that the bimetal rest lengths bend: each spring joins two
-  // couples whose centres are mid_sep_ apart, at offsets +-(half the couple's thickness) from the
-  // mid-surface (+ toward the top).
-  const RowMatX3& r = lat_.rest();
-  const int C = topo_.couples;
-  base_len_ = rest_len_;
-  mid_sep_.clear();
-  off_a_.clear();
-  off_b_.clear();
-  add_spring_geometry();
-  grad_dir_ = RowMatX3::Zero(C, 3);
-  grad_share_ = Eigen::VectorXd::Zero(C);
-  changed_.assign(C, 0);
-  couple_spacing_ = Eigen::VectorXd::Zero(C);
-  for (int c = 0; c < C; ++c) {
-    double sum = 0.0;
-    int k = 0;
-    for (int q = topo_.nbr_offset[c]; q < topo_.nbr_offset[c + 1]; ++q, ++k)
-      sum += (couple_centre(r, topo_.nbr_index[q]) - couple_centre(r, c)).norm();
-    couple_spacing_(c) = k > 0 ? sum / k : 1.0;
-  }
-}
-
-void LatticeDynamics::add_spring_geometry() {
-  // mid_sep_, off_a_, off_b_ of the springs from the first not yet measured to the last.
-  const RowMatX3& r = lat_.rest();
-  auto offset = [&](int v) {
-    const double half = 0.5 * (r.row(v | 1) - r.row(v & ~1)).norm();
-    return (v & 1) ? half : -half;
-  };
-  for (std::size_t s = mid_sep_.size(); s < sa_.size(); ++s) {
-    mid_sep_.push_back((couple_centre(r, sb_[s] / 2) - couple_centre(r, sa_[s] / 2)).norm());
-    off_a_.push_back(offset(sa_[s]));
-    off_b_.push_back(offset(sb_[s]));
-  }
-}
-
-static double chord_ratio(double kappa, double sep) {
-  // Chord over arc of a mid-surface bent to curvature kappa over arc length sep, as
-  // bimetal_ratio's with both offsets 0 (and its half-turn clamp).
-  if (!(sep > 0.0)) return 1.0;
-  const double half = 0.5 * std::clamp(kappa, -kPi / sep, kPi / sep) * sep;
-  return std::abs(half) > 1e-12 ? std::sin(half) / half : 1.0;
-}
-
-double LatticeDynamics::bimetal_ratio(int s, double kappa) const {
-  // Distance between two points of a sheet bent to curvature kappa (centre of curvature on the
-  // top side), at mid-surface arc length s apart and offsets oa, ob along the normals:
-  // d^2 = (oa - ob)^2 + (1 - kappa oa)(1 - kappa ob) chord^2, chord = 2 sin(kappa s / 2) / kappa.
-  // The top face (o > 0) shortens by kappa o per unit length, the bottom lengthens: a bimetal
-  // strip. Returned relative to the flat sheet, so that the rest lattice's own shape is kept.
-  const double sep = mid_sep_[s], oa = off_a_[s], ob = off_b_[s];
-  const double d0 = std::sqrt((oa - ob) * (oa - ob) + sep * sep);
-  if (!(d0 > 0.0) || sep == 0.0) return 1.0;
-  // At most a half turn between the couples, and the layers stay on their side of the centre.
-  const double omax = std::max(std::abs(oa), std::abs(ob));
-  double k = std::clamp(kappa, -kPi / sep, kPi / sep);
-  if (omax > 0.0) k = std::clamp(k, -0.9 / omax, 0.9 / omax);
-  const double half = 0.5 * k * sep;
-  const double chord = std::abs(half) > 1e-12 ? sep * std::sin(half) / half : sep;
-  const double d2 = (oa - ob) * (oa - ob) + (1.0 - k * oa) * (1.0 - k * ob) * chord * chord;
-  return std::sqrt(std::max(d2, 0.0)) / d0;
-}
-
-void LatticeDynamics::apply_bimetal(const Eigen::VectorXd& D, bool all) {
-  // Rest lengths are a function of D alone (not of the path), so the springs never carry the
-  // history of earlier crumples; only springs near a couple whose D changed are recomputed.
-  //
-  // The curl bends across the fire's front, not equally every way: a heated face shrinking
-  // alike in all directions wants a dome, which a sheet cannot take without stretching, so
-  // paper rolls about lines along the burning edge instead. A spring along unit direction u
-  // takes the curvature times (u . g)^2, g the direction in which D grows (a couple's D
-  // gradient); where D is flat across a couple (|grad D| spacing << kAnisotropicTurn) the
-  // factor blends to 1/2, the mean over directions.
-  const int C = topo_.couples;
-  const RowMatX3& r = lat_.rest();
-  auto centre = [&](int c) { return couple_centre(r, c); };
-  for (int c = 0; c < C; ++c) {
-    bool near = all || delta_(c) != 0.0;
-    for (int q = topo_.nbr_offset[c]; q < topo_.nbr_offset[c + 1] && !near; ++q) near = delta_(topo_.nbr_index[q]) != 0.0;
-    changed_[c] = near;
-    if (!near) continue;
-    Eigen::Vector3d g = Eigen::Vector3d::Zero();
-    for (int q = topo_.nbr_offset[c]; q < topo_.nbr_offset[c + 1]; ++q) {
-      const int o = topo_.nbr_index[q];
-      const Eigen::Vector3d e = centre(o) - centre(c);
-      const double l2 = e.squaredNorm();
-      if (l2 > 0) g += (D(o) - D(c)) * e / l2;
-    }
-    const double k = topo_.nbr_offset[c + 1] - topo_.nbr_offset[c];
-    const double slope = k > 0 ? 2.0 * g.norm() / k : 0.0;  // |grad D| (rad/m), averaged over axes
-    grad_share_(c) = std::min(1.0, slope * couple_spacing_(c) / kAnisotropicTurn);
-    grad_dir_.row(c) = g.norm() > 0 ? Eigen::RowVector3d(g.normalized().transpose()) : Eigen::RowVector3d::Zero();
-  }
-  auto factor = [&](int c, const Eigen::Vector3d& u) {
-    const double along = u.dot(grad_dir_.row(c).transpose());
-    return grad_share_(c) * along * along + (1.0 - grad_share_(c)) * 0.5;
-  };
-  // The curvature between two couples: their mean D over spacing, along the front.
-  auto curvature = [&](int ca, int cb) {
-    Eigen::Vector3d u = centre(cb) - centre(ca);
-    u = u.norm() > 0 ? Eigen::Vector3d(u.normalized()) : u;
-    const double f = p_.anisotropic_curl ? 0.5 * (factor(ca, u) + factor(cb, u)) : 1.0;
-    return 0.5 * p_.crumple_gain * f * (D(ca) / couple_spacing_(ca) + D(cb) / couple_spacing_(cb));
-  };
-  const int ns = static_cast<int>(sa_.size());
-  parallel_for(0, ns, kRowCost, [&](long s_) {
-    const int s = static_cast<int>(s_);
-    const int ca = sa_[s] / 2, cb = sb_[s] / 2;
-    if (ca == cb) return;  // a couple's own thickness spring keeps its length
-    if (!changed_[ca] && !changed_[cb]) return;
-    rest_len_[s] = base_len_[s] * bimetal_ratio(s, curvature(ca, cb));
-  });
-  if (!membrane_) return;
-  // A membrane spring lies on the mid-surface: bent, its ends are a chord of the arc apart.
-  std::vector<double>& rest = membrane_->rest();
-  parallel_for(0, membrane_->size(), kRowCost, [&](long e_) {
-    const int e = static_cast<int>(e_);
-    const int ca = membrane_->couple_a(e), cb = membrane_->couple_b(e);
-    if (!changed_[ca] && !changed_[cb]) return;
-    rest[e] = membrane_->base()[e] * chord_ratio(curvature(ca, cb), membrane_->base()[e]);
-  });
 }
 
 void LatticeDynamics::build_springs() {
@@ -366,27 +191,22 @@ void LatticeDynamics::build_springs() {
 
 void LatticeDynamics::build_incidence() {
   const int ns = static_cast<int>(sa_.size());
-  inc_start_.assign(n_ + 1, 0);
+  inc_.start.assign(n_ + 1, 0);
   for (int s = 0; s < ns; ++s) {
-    ++inc_start_[sa_[s] + 1];
-    ++inc_start_[sb_[s] + 1];
+    ++inc_.start[sa_[s] + 1];
+    ++inc_.start[sb_[s] + 1];
   }
-  for (int v = 0; v < n_; ++v) inc_start_[v + 1] += inc_start_[v];
-  inc_spring_.assign(2 * ns, 0);
-  inc_other_.assign(2 * ns, 0);
-  std::vector<int> fill(inc_start_.begin(), inc_start_.end() - 1);
+  for (int v = 0; v < n_; ++v) inc_.start[v + 1] += inc_.start[v];
+  inc_.spring.assign(2 * ns, 0);
+  inc_.other.assign(2 * ns, 0);
+  std::vector<int> fill(inc_.start.begin(), inc_.start.end() - 1);
   for (int s = 0; s < ns; ++s) {
-    inc_spring_[fill[sa_[s]]] = s;
-    inc_other_[fill[sa_[s]]++] = sb_[s];
-    inc_spring_[fill[sb_[s]]] = s;
-    inc_other_[fill[sb_[s]]++] = sa_[s];
+    inc_.spring[fill[sa_[s]]] = s;
+    inc_.other[fill[sa_[s]]++] = sb_[s];
+    inc_.spring[fill[sb_[s]]] = s;
+    inc_.other[fill[sb_[s]]++] = sa_[s];
   }
-  // Buffers of the solver: 6 per spring (Jacobian blocks), 27 per vertex (diagonal block and
-  // the two blocks of its row of the couple-block preconditioner),
-  // 3 per vertex for each of the CG vectors and the forces, and the dot-product partials.
-  work_.assign(6 * std::size_t(ns) + 27 * std::size_t(n_) + 7 * 3 * std::size_t(n_) +
-                   (3 * std::size_t(n_)) / kDotChunk + 2,
-               0.0);
+  solver_.resize(sa_.size(), n_);
 }
 
 double LatticeDynamics::lattice_rigidity() const {
@@ -412,14 +232,12 @@ void LatticeDynamics::add_membrane() {
     kind_.push_back(kPatternSpring);
     const double len = (r.row(b) - r.row(a)).norm();
     rest_len_.push_back(len);
-    base_len_.push_back(len);
   }
-  add_spring_geometry();
+  bimetal_.add_springs();
   membrane_->link(sa_, sb_, r, C_);
-  build_incidence();
-  factor_ = std::make_unique<Factor>();  // the pattern gained blocks
+  build_incidence();  // the solver's pattern gained blocks
   refresh_spring_scale();
-  std::fill(awake_.begin(), awake_.end(), 1);
+  sleep_.wake_all();
 }
 
 void LatticeDynamics::refresh_membrane() {
@@ -453,7 +271,7 @@ void LatticeDynamics::set_strength(const Eigen::VectorXd& s) {
     require(std::isfinite(s(v)) && s(v) >= 0.0 && s(v) <= 1.0,
             "strength must be in [0, 1] (entry " + std::to_string(v) + ")");
   for (int v = 0; v < n_; ++v)
-    if (s(v) != strength_(v)) awake_[v] = 1;
+    if (s(v) != strength_(v)) sleep_.wake(v);
   strength_ = s;
   refresh_spring_scale();
 }
@@ -483,24 +301,21 @@ void LatticeDynamics::set_params(const DynamicsParams& p) {
   bend_share_ = target_share();
   if (bend_share_ < 1.0 && !membrane_) add_membrane();
   refresh_membrane();
-  if (moved) std::fill(awake_.begin(), awake_.end(), 1);
+  if (moved) sleep_.wake_all();
 }
 
 LatticeDynamics::Checkpoint LatticeDynamics::checkpoint() const {
-  return Checkpoint{mass_, strength_, awake_, hold_, hold_len_, vel_, accel_, wind_, grad_dir_, grad_share_,
+  return Checkpoint{mass_, strength_, sleep_.awake(), sleep_.hold(), sleep_.hold_len(), vel_, accel_, wind_, bimetal_.grad_dir(), bimetal_.grad_share(),
                     hist_x_, hist_v_, hist_stamp_, substep_count_, hist_h_};
 }
 
 void LatticeDynamics::rollback(Checkpoint&& c) {
   mass_ = std::move(c.mass);
   strength_ = std::move(c.strength);
-  awake_ = std::move(c.awake);
-  hold_ = std::move(c.hold);
-  hold_len_ = std::move(c.hold_len);
+  sleep_.restore(std::move(c.awake), std::move(c.hold), std::move(c.hold_len));
   vel_ = std::move(c.vel);
   accel_ = std::move(c.accel);
-  grad_dir_ = std::move(c.grad_dir);
-  grad_share_ = std::move(c.grad_share);
+  bimetal_.restore(std::move(c.grad_dir), std::move(c.grad_share));
   wind_ = c.wind;
   hist_x_ = std::move(c.hist_x);
   hist_v_ = std::move(c.hist_v);
@@ -517,7 +332,7 @@ void LatticeDynamics::set_masses(const Eigen::VectorXd& m) {
     require(std::isfinite(m(v)) && m(v) > 0.0, "masses must be finite and > 0 (entry " +
                                                     std::to_string(v) + ")");
   for (int v = 0; v < n_; ++v)
-    if (m(v) != mass_(v)) awake_[v] = 1;
+    if (m(v) != mass_(v)) sleep_.wake(v);
   mass_ = m;
 }
 
@@ -528,7 +343,7 @@ void LatticeDynamics::set_areas(const Eigen::VectorXd& a) {
     require(std::isfinite(a(v)) && a(v) >= 0.0, "areas must be finite and >= 0 (entry " +
                                                      std::to_string(v) + ")");
   for (int v = 0; v < n_; ++v)
-    if (a(v) != area_(v)) awake_[v] = 1;
+    if (a(v) != area_(v)) sleep_.wake(v);
   area_ = a;
 }
 
@@ -540,14 +355,14 @@ void LatticeDynamics::set_pinned(const std::vector<std::uint8_t>& pinned) {
     if (pinned_[v]) vel_.row(v).setZero();
   }
   forget_history();
-  std::fill(awake_.begin(), awake_.end(), 1);
+  sleep_.wake_all();
 }
 
 void LatticeDynamics::set_floor_offsets(const Eigen::VectorXd& offsets) {
   require(offsets.size() == 0 || offsets.size() == n_, "floor offsets: one per control vertex expected");
   require(offsets.allFinite(), "floor offsets must be finite");
-  floor_offset_ = offsets;
-  std::fill(awake_.begin(), awake_.end(), 1);
+  contacts_.set_floor_offsets(offsets);
+  sleep_.wake_all();
 }
 
 void LatticeDynamics::set_wind(const Eigen::Vector3d& w) {
@@ -555,7 +370,7 @@ void LatticeDynamics::set_wind(const Eigen::Vector3d& w) {
   if (w == wind_) return;
   wind_ = w;
   for (int v = 0; v < n_; ++v)
-    if (area_(v) > 0.0) awake_[v] = 1;
+    if (area_(v) > 0.0) sleep_.wake(v);
 }
 
 void LatticeDynamics::set_wind_field(const RowMatX3& w) {
@@ -563,7 +378,7 @@ void LatticeDynamics::set_wind_field(const RowMatX3& w) {
   require(w.allFinite(), "wind field must be finite");
   wind_field_ = w;
   for (int v = 0; v < n_; ++v)
-    if (area_(v) > 0.0) awake_[v] = 1;
+    if (area_(v) > 0.0) sleep_.wake(v);
 }
 
 void LatticeDynamics::set_state(const RowMatX3& x, const RowMatX3& v) {
@@ -576,7 +391,7 @@ void LatticeDynamics::set_state(const RowMatX3& x, const RowMatX3& v) {
   self_contact_->reset();
   for (int q = 0; q < n_; ++q)
     if (pinned_[q]) vel_.row(q).setZero();
-  std::fill(awake_.begin(), awake_.end(), 1);
+  sleep_.wake_all();
 }
 
 Eigen::Vector3d LatticeDynamics::couple_normal(int v, const RowMatX3& x) const {
@@ -590,9 +405,9 @@ Eigen::Vector3d LatticeDynamics::vertex_force(int v, const RowMatX3& x, const Ro
   const double m = mass_(v);
   Eigen::Vector3d f = m * p_.gravity - p_.c_damping * m * vel.row(v).transpose();
   f.z() += m * p_.buoyancy * heat_(v);
-  for (int q = inc_start_[v]; q < inc_start_[v + 1]; ++q) {
-    const int s = inc_spring_[q];
-    const Eigen::Vector3d d = (x.row(inc_other_[q]) - x.row(v)).transpose();
+  for (int q = inc_.start[v]; q < inc_.start[v + 1]; ++q) {
+    const int s = inc_.spring[q];
+    const Eigen::Vector3d d = (x.row(inc_.other[q]) - x.row(v)).transpose();
     const double l = d.norm();
     if (l > 1e-300) f += spring_k(s) * (l - rest_len_[s]) / l * d;
   }
@@ -607,7 +422,7 @@ Eigen::Vector3d LatticeDynamics::vertex_force(int v, const RowMatX3& x, const Ro
 
 std::vector<std::uint8_t> LatticeDynamics::awake() const {
   std::vector<std::uint8_t> out(n_);
-  for (int v = 0; v < n_; ++v) out[v] = awake_[v] && !pinned_[v];
+  for (int v = 0; v < n_; ++v) out[v] = sleep_.awake()[v] && !pinned_[v];
   return out;
 }
 
@@ -661,8 +476,8 @@ double LatticeDynamics::omega_bound(const std::vector<int>& verts) const {
   for (int v : verts) {
     if (pinned_[v]) continue;
     double b = 0.0;
-    for (int q = inc_start_[v]; q < inc_start_[v + 1]; ++q) {
-      const int s = inc_spring_[q], o = inc_other_[q];
+    for (int q = inc_.start[v]; q < inc_.start[v + 1]; ++q) {
+      const int s = inc_.spring[q], o = inc_.other[q];
       const double l = (x.row(o) - x.row(v)).norm();
       const double g = l > 1e-300 ? std::abs(1.0 - rest_len_[s] / l) : 1.0;
       const double norm = spring_k(s) * std::max(1.0, g);
@@ -684,124 +499,6 @@ double LatticeDynamics::max_damping_rate() const {
   double c = p_.c_damping;
   for (int v : active_) c = std::max(c, p_.c_damping + p_.wind_drag * area_(v) / mass_(v));
   return c;
-}
-
-// ---------------------------------------------------------------------------------------------
-// Work buffers: [jacobian blocks 6/spring | diagonal blocks 9/vertex | preconditioner 18/vertex |
-// f, b, dv, r, z, p, Ap: 3/vertex each | dot partials].
-namespace {
-struct Buffers {
-  double *jac, *diag, *pinv, *f, *b, *dv, *r, *z, *p, *Ap, *partial;
-};
-Buffers buffers(std::vector<double>& w, std::size_t ns, std::size_t n) {
-  Buffers B;
-  double* q = w.data();
-  B.jac = q;
-  q += 6 * ns;
-  B.diag = q;
-  q += 9 * n;
-  B.pinv = q;
-  q += 18 * n;
-  double** vecs[7] = {&B.f, &B.b, &B.dv, &B.r, &B.z, &B.p, &B.Ap};
-  for (double** v : vecs) {
-    *v = q;
-    q += 3 * n;
-  }
-  B.partial = q;
-  return B;
-}
-
-// Sum of a[i] * b[i] in fixed chunks summed in order: the same bits for any thread count.
-double det_dot(const double* a, const double* b, int len, double* partial) {
-  const int chunks = (len + kDotChunk - 1) / kDotChunk;
-  parallel_for(0, chunks, kDotChunk, [&](long c_) {
-    const int c = static_cast<int>(c_);
-    double s = 0.0;
-    const int end = std::min(len, (c + 1) * kDotChunk);
-    for (int i = c * kDotChunk; i < end; ++i) s += a[i] * b[i];
-    partial[c] = s;
-  });
-  double t = 0.0;
-  for (int c = 0; c < chunks; ++c) t += partial[c];
-  return t;
-}
-
-void store_sym(double* out, const Eigen::Matrix3d& J) {
-  out[0] = J(0, 0), out[1] = J(1, 1), out[2] = J(2, 2);
-  out[3] = J(0, 1), out[4] = J(0, 2), out[5] = J(1, 2);
-}
-Eigen::Matrix3d load_sym(const double* s) {
-  Eigen::Matrix3d J;
-  J << s[0], s[3], s[4], s[3], s[1], s[5], s[4], s[5], s[2];
-  return J;
-}
-Eigen::Map<Eigen::Vector3d> vec3(double* base, int slot) {
-  return Eigen::Map<Eigen::Vector3d>(base + 3 * slot);
-}
-Eigen::Map<Eigen::Matrix3d> mat3(double* base, int slot) {
-  return Eigen::Map<Eigen::Matrix3d>(base + 9 * slot);
-}
-}  // namespace
-
-Eigen::Vector3d LatticeDynamics::supported(int v, Eigen::Vector3d f) const {
-  if (p_.has_floor && lat_.positions()(v, 2) <= floor_at(v) && f.z() < 0.0) {
-    const double normal = -f.z();
-    f.z() = 0.0;
-    const double t = std::hypot(f.x(), f.y());
-    const double keep = t > p_.friction * normal ? (t - p_.friction * normal) / t : 0.0;
-    f.x() *= keep;
-    f.y() *= keep;
-  }
-  // A collider holds a vertex resting on it the same way: the inward push is taken, and static
-  // friction takes up to friction times that of the tangential force.
-  ColliderHit hit;
-  if (collider_contact(lat_.positions().row(v).transpose(), hit)) {
-    const double fn = f.dot(hit.normal);
-    if (fn < 0.0) {
-      const Eigen::Vector3d ft = f - fn * hit.normal;
-      const double t = ft.norm();
-      const double keep = t > hit.friction * -fn ? (t - hit.friction * -fn) / t : 0.0;
-      f = keep * ft;
-    }
-  }
-  return f;
-}
-
-void LatticeDynamics::collect_active() {
-  active_.clear();
-  std::fill(slot_.begin(), slot_.end(), -1);
-  for (int v = 0; v < n_; ++v)
-    if (awake_[v] && !pinned_[v]) {
-      slot_[v] = static_cast<int>(active_.size());
-      active_.push_back(v);
-    }
-}
-
-void LatticeDynamics::wake_rings(std::vector<std::uint8_t>& flag, int rings) const {
-  // flag: 1 = seed; grows by spring neighbours `rings` times (2 marks the new ring).
-  for (int r = 0; r < rings; ++r) {
-    for (int v = 0; v < n_; ++v)
-      if (flag[v] == 1)
-        for (int q = inc_start_[v]; q < inc_start_[v + 1]; ++q)
-          if (!flag[inc_other_[q]]) flag[inc_other_[q]] = 2;
-    for (auto& f : flag)
-      if (f == 2) f = 1;
-  }
-}
-
-void LatticeDynamics::wake_around_forcing() {
-  // Forced vertices (a crumple, or a heat change that would reach sleep_speed within the step)
-  // wake with two rings of spring neighbours; moving ones with one ring.
-  std::vector<std::uint8_t>& seed = mark_;
-  for (int v = 0; v < n_; ++v) seed[v] = forced_[v];
-  wake_rings(seed, 1);
-  for (int v = 0; v < n_; ++v)
-    if (awake_[v] && vel_.row(v).norm() >= p_.sleep_speed) seed[v] = 1;
-  wake_rings(seed, 1);
-  for (int v = 0; v < n_; ++v) {
-    if (seed[v]) awake_[v] = 1;
-    seed[v] = 0;
-  }
 }
 
 void LatticeDynamics::apply_plasticity() {
@@ -830,8 +527,8 @@ double LatticeDynamics::max_active_strain() const {
   const RowMatX3& x = lat_.positions();
   double worst = 0.0;
   for (int v : active_)
-    for (int q = inc_start_[v]; q < inc_start_[v + 1]; ++q) {
-      const int s = inc_spring_[q], o = inc_other_[q];
+    for (int q = inc_.start[v]; q < inc_.start[v + 1]; ++q) {
+      const int s = inc_.spring[q], o = inc_.other[q];
       // A layer spring whose membrane part a membrane spring carries also bends: its strain
       // is the curvature's (kappa h / 2), and the membrane spring's is the sheet's stretch.
       if (rest_len_[s] <= 0.0 || kind_[s] == kPatternSpring || (membrane_ && membrane_->carried(s))) continue;
@@ -860,8 +557,8 @@ int LatticeDynamics::integrate(double dt, int substeps, StepStats& st) {
         st.cg_iterations += implicit_substep(h);
       else
         explicit_substep(h, p_.integrator == Integrator::Explicit);
-      apply_floor(h);
-      apply_colliders(h);
+      contacts_.apply_floor(h);
+      contacts_.apply_colliders(h);
       if (p_.self_collision)
         self_contact_->apply(self_contact_->separation(p_.self_distance), lat_.positions(), vel_, mass_, slot_);
     }
@@ -894,27 +591,27 @@ int LatticeDynamics::choose_substeps(double dt, double omega, double c_eff) cons
           " substeps (largest frequency " + std::to_string(omega) + " rad/s, stable substep " +
           std::to_string(h) + " s), more than max_substeps = " + std::to_string(p_.max_substeps) +
           "; use the Implicit integrator or raise max_substeps");
-    return std::max({1, static_cast<int>(need), contact_substeps(dt)});
+    return std::max({1, static_cast<int>(need), contacts_.contact_substeps(dt)});
   }
   // Implicit: one Newton step per substep is accurate while no spring changes length by more
   // than max_stretch of its rest length in a substep.
   const RowMatX3& x = lat_.positions();
   double ratio = 0.0;
   for (int v : active_)
-    for (int q = inc_start_[v]; q < inc_start_[v + 1]; ++q) {
-      const int s = inc_spring_[q], o = inc_other_[q];
+    for (int q = inc_.start[v]; q < inc_.start[v + 1]; ++q) {
+      const int s = inc_.spring[q], o = inc_.other[q];
       if (kind_[s] == kPatternSpring) continue;
       const double len = std::max(rest_len_[s], 1e-3 * (x.row(o) - x.row(v)).norm());
       if (len <= 0.0) continue;
       const double rel = (vel_.row(v) + drift_.row(v) - vel_.row(o) - drift_.row(o)).norm();
       ratio = std::max(ratio, rel * dt / (p_.max_stretch * len));
     }
-  const double need = std::max(std::ceil(ratio), double(contact_substeps(dt)));
+  const double need = std::max(std::ceil(ratio), double(contacts_.contact_substeps(dt)));
   return static_cast<int>(std::clamp(need, 1.0, double(p_.max_substeps)));
 }
 
 void LatticeDynamics::explicit_substep(double h, bool paper) {
-  Buffers B = buffers(work_, sa_.size(), n_);
+  const ImplicitSolver::Buffers B = solver_.buffers();
   RowMatX3& x = lat_.positions();
   const int na = static_cast<int>(active_.size());
   parallel_for(0, na, kRowCost, [&](long a_) {
@@ -927,25 +624,14 @@ void LatticeDynamics::explicit_substep(double h, bool paper) {
     const int v = active_[a];
     const Eigen::Vector3d acc = vec3(B.f, a);
     vel_.row(v) += h * acc.transpose();
-    // A vertex resting on the floor that the substep presses into it: the floor takes the
-    // normal speed and friction the tangential one before the position moves. Applied after
-    // the move (apply_floor alone), each substep let a resting vertex slide h^2 a_t first, and
-    // a sheet that a light wind pushed crept across its table by T h a_t (the demo's A4 in
-    // 3 m/s wind: 9 mm in 20 s at h = 1/6000 s).
-    if (p_.has_floor && x(v, 2) <= floor_at(v) && vel_(v, 2) <= 0.0) {
-      const double removed = -vel_(v, 2), t = std::hypot(vel_(v, 0), vel_(v, 1));
-      const double keep = t > p_.friction * removed ? (t - p_.friction * removed) / t : 0.0;
-      vel_(v, 0) *= keep;
-      vel_(v, 1) *= keep;
-      vel_(v, 2) = 0.0;
-    }
+    contacts_.press(v);  // before the move: a resting vertex must not slide h^2 a_t first
     x.row(v) += h * (vel_.row(v) + drift_.row(v));
     if (paper) x.row(v) += 0.5 * h * h * acc.transpose();
   });
 }
 
 void LatticeDynamics::implicit_assemble(double h) {
-  Buffers B = buffers(work_, sa_.size(), n_);
+  const ImplicitSolver::Buffers B = solver_.buffers();
   const RowMatX3& x = lat_.positions();
   const int na = static_cast<int>(active_.size());
   const double h2 = h * h;
@@ -956,8 +642,8 @@ void LatticeDynamics::implicit_assemble(double h) {
   parallel_for(0, na, kRowCost, [&](long a_) {
     const int a = static_cast<int>(a_);
     const int v = active_[a];
-    for (int q = inc_start_[v]; q < inc_start_[v + 1]; ++q) {
-      const int s = inc_spring_[q], o = inc_other_[q];
+    for (int q = inc_.start[v]; q < inc_.start[v + 1]; ++q) {
+      const int s = inc_.spring[q], o = inc_.other[q];
       if (slot_[o] >= 0 && o < v) continue;
       const Eigen::Vector3d d = (x.row(o) - x.row(v)).transpose();
       Eigen::Matrix3d J = spring_block(d, spring_k(s), rest_len_[s], true);
@@ -975,326 +661,44 @@ void LatticeDynamics::implicit_assemble(double h) {
     const int v = active_[a];
     const Eigen::Vector3d f = vertex_force(v, x, vel_);
     vec3(B.f, a) = f;
-    contact_(v) = -1.0;
-    stick_[v] = 0;
-    if (p_.has_floor && x(v, 2) <= floor_at(v)) {
-      const double vz_free = vel_(v, 2) + h * f.z() / mass_(v);
-      if (vz_free <= 0.0) {
-        contact_(v) = -vz_free;
-        // Static friction inside the solve: a contact whose tangential speed at the substep's
-        // end (explicit guess) the floor's friction impulse (friction x the normal speed it
-        // removes) can absorb sticks, all three velocity components filtered to zero. Applied
-        // after the solve instead, friction stopped such a vertex only once its neighbours had
-        // been solved as if it slid, and a sheet a light wind pushed crept across its table
-        // by an amount proportional to the substep (the demo's A4 in 3 m/s wind: 0.39 m in
-        // 20 s at dt = 1/24 s, against 7 mm with the symplectic integrator's small substeps).
-        const double tx = vel_(v, 0) + h * f.x() / mass_(v), ty = vel_(v, 1) + h * f.y() / mass_(v);
-        // A contact that Fig. 5's prescribed crumple moves this step follows it (the chord's
-        // in-plane part is what lets its neighbours lift): it slides, as before.
-        stick_[v] = p_.friction > 0.0 && drift_.row(v).squaredNorm() == 0.0 &&
-                    std::hypot(tx, ty) <= p_.friction * contact_(v);
-      }
-    }
+    contacts_.decide(v, h, f);
     Eigen::Matrix3d D = mass_(v) * (1.0 + h * p_.c_damping) * Eigen::Matrix3d::Identity();
     if (p_.wind_drag > 0.0 && area_(v) > 0.0) {
       const Eigen::Vector3d n = couple_normal(v, x);
       D += h * p_.wind_drag * area_(v) * n * n.transpose();
     }
-    for (int q = inc_start_[v]; q < inc_start_[v + 1]; ++q)
-      D += h2 * load_sym(B.jac + 6 * inc_spring_[q]);
+    for (int q = inc_.start[v]; q < inc_.start[v + 1]; ++q)
+      D += h2 * load_sym(B.jac + 6 * inc_.spring[q]);
     mat3(B.diag, a) = D;
   });
   implicit_rhs(h);
 }
 
-void LatticeDynamics::build_jacobi(double h) {
-  Buffers B = buffers(work_, sa_.size(), n_);
-  const int na = static_cast<int>(active_.size());
-  const double h2 = h * h;
-  // Couple-block Jacobi: the top-bottom spring is the stiffest, so both vertices of a couple are
-  // inverted together (6 x 6); a vertex whose partner is not active gets its 3 x 3 inverse.
-  parallel_for(0, na, kRowCost, [&](long a_) {
-    const int a = static_cast<int>(a_);
-    const int v = active_[a], pa = slot_[v ^ 1];
-    if (pa < 0) {
-      mat3(B.pinv, 2 * a) = mat3(B.diag, a).inverse();
-      mat3(B.pinv, 2 * a + 1).setZero();
-      return;
-    }
-    Eigen::Matrix<double, 6, 6> C;
-    const Eigen::Matrix3d J = load_sym(B.jac + 6 * vert_spring_[v / 2]);
-    C.topLeftCorner<3, 3>() = mat3(B.diag, a);
-    C.bottomRightCorner<3, 3>() = mat3(B.diag, pa);
-    C.topRightCorner<3, 3>() = -h2 * J;
-    C.bottomLeftCorner<3, 3>() = -h2 * J;
-    const Eigen::Matrix<double, 6, 6> Ci = C.inverse();
-    mat3(B.pinv, 2 * a) = Ci.topLeftCorner<3, 3>();
-    mat3(B.pinv, 2 * a + 1) = Ci.topRightCorner<3, 3>();
-  });
-}
-
-Eigen::Vector3d LatticeDynamics::substep_drift(int v, double h) const {
-  Eigen::Vector3d u = drift_.row(v).transpose();
-  // A floor contact ends the substep on the floor (B&W's position alteration y = h u), lifted
-  // only by the crumple: this also lands a contact that starts above the floor.
-  // Static friction also holds it in place against the crumple's sliding: the crumple lifts a
-  // resting sheet off the table but does not drag it across. Without this, repeated crumples
-  // with plastic rest lengths walk a sheet across the floor like an inchworm.
-  if (slot_[v] >= 0 && contact_(v) >= 0.0) {
-    u.z() = std::max(u.z(), 0.0) + (floor_at(v) - lat_.positions()(v, 2)) / h;
-    if (p_.friction > 0.0) u.x() = u.y() = 0.0;
-  }
-  return u;
-}
-
 void LatticeDynamics::implicit_rhs(double h) {
   // b = h (f + h K w), w = v + substep drift: K w is the force change along the motion.
-  Buffers B = buffers(work_, sa_.size(), n_);
+  const ImplicitSolver::Buffers B = solver_.buffers();
   const int na = static_cast<int>(active_.size());
+  // Each active vertex's w once, not once per spring that reads it; a vertex that does not
+  // move has no contact, so its drift is the crumple's alone.
   parallel_for(0, na, kRowCost, [&](long a_) {
     const int a = static_cast<int>(a_);
     const int v = active_[a];
-    const Eigen::Vector3d wv = vel_.row(v).transpose() + substep_drift(v, h);
+    vec3(B.w, a) = vel_.row(v).transpose() + contacts_.substep_drift(v, h);
+  });
+  parallel_for(0, na, kRowCost, [&](long a_) {
+    const int a = static_cast<int>(a_);
+    const int v = active_[a];
+    const Eigen::Vector3d wv = vec3(B.w, a);
     Eigen::Vector3d Kw = Eigen::Vector3d::Zero();
-    for (int q = inc_start_[v]; q < inc_start_[v + 1]; ++q) {
-      const int o = inc_other_[q];
-      const Eigen::Vector3d wo = vel_.row(o).transpose() + substep_drift(o, h);
-      Kw -= load_sym(B.jac + 6 * inc_spring_[q]) * (wv - wo);
+    for (int q = inc_.start[v]; q < inc_.start[v + 1]; ++q) {
+      const int o = inc_.other[q], so = slot_[o];
+      const Eigen::Vector3d wo =
+          so >= 0 ? Eigen::Vector3d(vec3(B.w, so)) : Eigen::Vector3d(vel_.row(o).transpose() + drift_.row(o).transpose());
+      Kw -= load_sym(B.jac + 6 * inc_.spring[q]) * (wv - wo);
     }
     vec3(B.b, a) = h * (vec3(B.f, a) + h * Kw);
-    filter(v, B.b + 3 * a);
+    contacts_.filter(v, B.b + 3 * a);
   });
-}
-
-bool LatticeDynamics::add_landings(double h) {
-  // The contact test before the solve sees only vertices already on the floor, with an explicit
-  // guess of their velocity. A vertex a hair above the floor (lifted by a crumple, or by
-  // rounding), or one the guess let go, is free in the solve, and a frame-sized substep then
-  // carries it, and its whole couple, far below the floor (g dt^2 = 17 mm at 1/24 s); projecting
-  // both layers back onto the floor flattened the couple. Such vertices become contacts and the
-  // system is solved again. Of a couple only the vertex that ends lower lands first: its partner
-  // is below the floor only because it fell with it, and the stiff top-bottom spring holds it
-  // once the lower one is stopped (it lands in a later round if it still goes below).
-  if (!p_.has_floor) return false;
-  Buffers B = buffers(work_, sa_.size(), n_);
-  const RowMatX3& x = lat_.positions();
-  auto end_z = [&](int v) {  // where the solution takes v this substep
-    const int a = slot_[v];
-    if (a < 0) return x(v, 2);
-    return x(v, 2) + h * (vel_(v, 2) + B.dv[3 * a + 2] + substep_drift(v, h).z());
-  };
-  list_.clear();
-  for (int v : active_) {
-    if (contact_(v) >= 0.0) continue;
-    const double z = end_z(v);
-    const int partner = v ^ 1;
-    const bool partner_down = slot_[partner] >= 0 && contact_(partner) >= 0.0;
-    if (z < floor_at(v) && (partner_down || z <= end_z(partner))) list_.push_back(v);
-  }
-  for (int v : list_) {  // after the loop: the test above reads contact_ of partners
-    const int a = slot_[v];
-    contact_(v) = std::max(0.0, -(vel_(v, 2) + B.dv[3 * a + 2]));
-    B.dv[3 * a + 2] = -vel_(v, 2);
-  }
-  return !list_.empty();
-}
-
-void LatticeDynamics::apply_A(double h, const double* in, double* out) {
-  Buffers B = buffers(work_, sa_.size(), n_);
-  const int na = static_cast<int>(active_.size());
-  const double h2 = h * h;
-  parallel_for(0, na, kRowCost, [&](long a_) {
-    const int a = static_cast<int>(a_);
-    const int v = active_[a];
-    Eigen::Vector3d y = mat3(B.diag, a) * Eigen::Map<const Eigen::Vector3d>(in + 3 * a);
-    for (int q = inc_start_[v]; q < inc_start_[v + 1]; ++q) {
-      const int so = slot_[inc_other_[q]];
-      if (so >= 0)
-        y -= h2 * load_sym(B.jac + 6 * inc_spring_[q]) * Eigen::Map<const Eigen::Vector3d>(in + 3 * so);
-    }
-    vec3(out, a) = y;
-  });
-}
-
-void LatticeDynamics::precondition(const double* in, double* out) {
-  Buffers B = buffers(work_, sa_.size(), n_);
-  const int na = static_cast<int>(active_.size());
-  if (precond_ldlt_) {
-    // z = S P S r: the filter S zeroes the contacts' v_z in and out. Vertices of the factored
-    // set go through the factor (the others of that set see a zero residual), the rest through
-    // their diagonal block.
-    Factor& f = *factor_;
-    f.rhs.setZero();
-    for (int a = 0; a < na; ++a) {
-      const int fs = f.slot[active_[a]];
-      if (fs < 0) continue;
-      for (int i = 0; i < 3; ++i) f.rhs[3 * fs + i] = in[3 * a + i];
-      filter(active_[a], f.rhs.data() + 3 * fs);
-    }
-    f.ldlt.solve(f.rhs.data());
-    for (int a = 0; a < na; ++a) {
-      const int fs = f.slot[active_[a]];
-      if (fs >= 0)
-        vec3(out, a) = Eigen::Map<const Eigen::Vector3d>(f.rhs.data() + 3 * fs);
-      else
-        vec3(out, a) = mat3(B.pinv, 2 * a) * Eigen::Map<const Eigen::Vector3d>(in + 3 * a);
-      filter(active_[a], out + 3 * a);
-    }
-    return;
-  }
-  parallel_for(0, na, kRowCost, [&](long a_) {
-    const int a = static_cast<int>(a_);
-    const int v = active_[a], pa = slot_[v ^ 1];
-    Eigen::Vector3d y = mat3(B.pinv, 2 * a) * Eigen::Map<const Eigen::Vector3d>(in + 3 * a);
-    if (pa >= 0) y += mat3(B.pinv, 2 * a + 1) * Eigen::Map<const Eigen::Vector3d>(in + 3 * pa);
-    filter(v, y.data());  // the filter of Baraff and Witkin's modified PCG
-    vec3(out, a) = y;
-  });
-}
-
-bool LatticeDynamics::use_ldlt() const {
-  if (p_.preconditioner == Preconditioner::Auto) return static_cast<int>(active_.size()) <= p_.ldlt_max_vertices;
-  return p_.preconditioner == Preconditioner::Ldlt;
-}
-
-void LatticeDynamics::factor_pattern() {
-  Factor& f = *factor_;
-  if (f.analysed && f.active == active_) return;
-  const int na = static_cast<int>(active_.size());
-  f.active = active_;
-  f.slot = slot_;
-  f.valid = false;
-  f.blk_start.assign(1, 0);
-  f.blk_row.clear();
-  f.blk_spring.clear();
-  for (int a = 0; a < na; ++a) {
-    const int v = active_[a];
-    f.sort_buf.clear();
-    for (int q = inc_start_[v]; q < inc_start_[v + 1]; ++q)
-      if (slot_[inc_other_[q]] > a) f.sort_buf.emplace_back(slot_[inc_other_[q]], inc_spring_[q]);
-    std::sort(f.sort_buf.begin(), f.sort_buf.end());  // rows ascending within each column
-    f.blk_row.push_back(a);
-    f.blk_spring.push_back(-1);
-    for (const auto& [row, spring] : f.sort_buf) {
-      f.blk_row.push_back(row);
-      f.blk_spring.push_back(spring);
-    }
-    f.blk_start.push_back(static_cast<int>(f.blk_row.size()));
-  }
-  f.values.resize(9 * f.blk_row.size());
-  f.rhs.resize(3 * na);
-  f.ldlt.analyze(na, f.blk_start, f.blk_row);
-  f.analysed = true;
-}
-
-void LatticeDynamics::factor_fill(double h) {
-  // A = M (1 + h c) + h W + h^2 J, with each floor contact's v_z row and column replaced by the
-  // identity, as the filtered conjugate gradients see it. Blocks are written column-major.
-  Factor& f = *factor_;
-  Buffers B = buffers(work_, sa_.size(), n_);
-  const int na = static_cast<int>(active_.size());
-  const double h2 = h * h;
-  const int sym[3][3] = {{0, 3, 4}, {3, 1, 5}, {4, 5, 2}};  // store_sym's layout
-  for (int a = 0; a < na; ++a) {
-    const int va = active_[a];
-    for (int b = f.blk_start[a]; b < f.blk_start[a + 1]; ++b) {
-      const int r = f.blk_row[b];
-      const int vr = active_[r];
-      double* val = f.values.data() + 9 * b;
-      if (r == a) {
-        const auto D = mat3(B.diag, a);
-        for (int i = 0; i < 3; ++i)
-          for (int ii = 0; ii < 3; ++ii)
-            val[3 * i + ii] = (filtered(va, i) || filtered(va, ii)) ? (ii == i ? 1.0 : 0.0) : D(ii, i);
-        continue;
-      }
-      const double* J = B.jac + 6 * f.blk_spring[b];
-      for (int i = 0; i < 3; ++i)
-        for (int ii = 0; ii < 3; ++ii)
-          val[3 * i + ii] = (filtered(va, i) || filtered(vr, ii)) ? 0.0 : -h2 * J[sym[ii][i]];
-    }
-  }
-}
-
-void LatticeDynamics::refresh_factor(double h) {
-  // A factor of another active set F still preconditions this one, S: F's part of the residual
-  // goes through A_FF^-1, the vertices outside F through their diagonal blocks (an SPD block
-  // diagonal). It is refactored when it is stale, or when S and F differ by more than a quarter.
-  Factor& f = *factor_;
-  if (f.valid && !f.stale) {
-    int outside = 0;
-    for (int v : active_) outside += f.slot[v] < 0;
-    const int ns = static_cast<int>(active_.size()), nf = static_cast<int>(f.active.size());
-    if (4 * outside <= ns && nf - (ns - outside) <= ns / 4) return;
-  }
-  factor_pattern();
-  factor_fill(h);
-  // A failure is not expected (A is symmetric positive definite); the solve then falls back to
-  // Jacobi.
-  f.valid = f.ldlt.factorize(f.values.data());
-  ++factorizations_;
-  f.stale = false;
-}
-
-int LatticeDynamics::implicit_solve(double h) {
-  Buffers B = buffers(work_, sa_.size(), n_);
-  const int na = static_cast<int>(active_.size());
-  const bool ldlt = use_ldlt();
-  if (ldlt) refresh_factor(h);
-  precond_ldlt_ = ldlt && factor_->valid;
-  if (!precond_ldlt_) {
-    build_jacobi(h);
-  } else {
-    // Vertices outside the factored set are preconditioned by their diagonal block.
-    for (int a = 0; a < na; ++a)
-      if (factor_->slot[active_[a]] < 0) mat3(B.pinv, 2 * a) = mat3(B.diag, a).inverse();
-  }
-  const int N = 3 * na;
-  auto axpy = [&](double alpha, const double* xv, double* y) {  // y += alpha x
-    parallel_for(0, N, kAxpyCost, [&](long i) { y[i] += alpha * xv[i]; });
-  };
-  // Modified PCG (Baraff and Witkin 1998) from the start value in B.dv: constrained DOFs start
-  // at their prescribed value (v_z -> 0) and every search direction is filtered to leave them
-  // there.
-  apply_A(h, B.dv, B.Ap);
-  for (int i = 0; i < N; ++i) B.r[i] = B.b[i] - B.Ap[i];
-  for (int a = 0; a < na; ++a) {
-    filter(active_[a], B.r + 3 * a);
-    filter(active_[a], B.b + 3 * a);
-  }
-  int iterations = 0;
-  const double rnorm0 = std::sqrt(det_dot(B.r, B.r, N, B.partial));
-  const double ref = std::max(rnorm0, std::sqrt(det_dot(B.b, B.b, N, B.partial)));
-  // Absolute floor: a residual below cg_velocity_tolerance times the mass norm changes the
-  // velocities by less than about that (A >= M), whatever rounding-level right-hand side a
-  // resting sheet has; without it such a sheet would iterate on rounding noise.
-  double mass2 = 0.0;
-  for (int v : active_) mass2 += 3.0 * mass_(v) * mass_(v);
-  const double floor_abs = p_.cg_velocity_tolerance * std::sqrt(mass2);
-  if (rnorm0 > floor_abs) {
-    precondition(B.r, B.p);
-    double rz = det_dot(B.r, B.p, N, B.partial);
-    while (iterations < p_.cg_max_iterations) {
-      ++iterations;
-      apply_A(h, B.p, B.Ap);
-      for (int a = 0; a < na; ++a)
-        filter(active_[a], B.Ap + 3 * a);
-      const double pAp = det_dot(B.p, B.Ap, N, B.partial);
-      if (!(pAp > 0.0)) break;
-      const double alpha = rz / pAp;
-      axpy(alpha, B.p, B.dv);
-      axpy(-alpha, B.Ap, B.r);
-      const double rn = std::sqrt(det_dot(B.r, B.r, N, B.partial));
-      if (rn <= p_.cg_tolerance * ref || rn <= floor_abs) break;
-      precondition(B.r, B.z);
-      const double rz_new = det_dot(B.r, B.z, N, B.partial);
-      const double beta = rz_new / rz;
-      rz = rz_new;
-      parallel_for(0, N, kAxpyCost, [&](long i) { B.p[i] = B.z[i] + beta * B.p[i]; });
-    }
-  }
-  if (precond_ldlt_ && iterations > p_.refactor_iterations) factor_->stale = true;
-  return iterations;
 }
 
 double LatticeDynamics::bdf2_ratio(double h) const {
@@ -1333,33 +737,31 @@ int LatticeDynamics::implicit_substep(double h_step) {
     hist_h_ = h_step;
   }
   implicit_assemble(h);
-  Buffers B = buffers(work_, sa_.size(), n_);
+  const ImplicitSolver::Buffers B = solver_.buffers();
   // Warm start from the previous substep's acceleration (a smooth motion changes it little);
   // constrained DOFs start at their prescribed value.
   for (int a = 0; a < na; ++a) {
     const int v = active_[a];
     Eigen::Vector3d d0 = h * accel_.row(v).transpose();
     for (int i = 0; i < 3; ++i)
-      if (filtered(v, i)) d0(i) = -vel_(v, i);
+      if (contacts_.filtered(v, i)) d0(i) = -vel_(v, i);
     vec3(B.dv, a) = d0;
   }
-  int iterations = implicit_solve(h);
+  int iterations = solver_.solve(h);
   // Vertices the solution takes below the floor become contacts, and the system is solved
   // again from the last solution (each round adds at least one; rarely more than one round).
-  for (int round = 1; round < kMaxContactRounds && add_landings(h); ++round) {
+  for (int round = 1; round < kMaxContactRounds && contacts_.add_landings(h, B.dv); ++round) {
     implicit_rhs(h);
-    iterations += implicit_solve(h);
+    iterations += solver_.solve(h);
   }
   parallel_for(0, na, kRowCost, [&](long a_) {
     const int a = static_cast<int>(a_);
     const int v = active_[a];
-    const Eigen::Vector3d u = substep_drift(v, h);  // before x changes: it reads x
+    const Eigen::Vector3d u = contacts_.substep_drift(v, h);  // before x changes: it reads x
     vel_.row(v) += vec3(B.dv, a).transpose();
     accel_.row(v) = vec3(B.dv, a).transpose() / h;
     x.row(v) += h * (vel_.row(v) + u.transpose());
-    // A contact lands exactly on the floor (+ the crumple's lift), not a rounding below or
-    // above it, so that the next substep's contact test finds it there.
-    if (contact_(v) >= 0.0) x(v, 2) = floor_at(v) + h * std::max(drift_(v, 2), 0.0);
+    contacts_.settle(v, h);
   });
   return iterations;
 }
@@ -1381,190 +783,11 @@ void LatticeDynamics::remove_crumple_translation() {
     if (!pinned_[v] && disp_.row(v).squaredNorm() > 0.0) disp_.row(v) -= mean;
 }
 
-void LatticeDynamics::apply_floor(double h) {
-  if (!p_.has_floor) return;
-  RowMatX3& x = lat_.positions();
-  const bool implicit = is_implicit(p_.integrator);
-  for (int v : active_) {
-    // Coulomb friction: the tangential speed drops by friction times the normal speed the
-    // floor removed (from the contact filter, or from the projection below).
-    double removed = -1.0;
-    if (implicit && contact_(v) >= 0.0) removed = contact_(v);
-    if (x(v, 2) < floor_at(v)) {
-      removed = std::max(0.0, -vel_(v, 2));
-      x(v, 2) = floor_at(v);
-      vel_(v, 2) = std::max(0.0, vel_(v, 2));
-    }
-    if (removed < 0.0) continue;
-    const double t = std::hypot(vel_(v, 0), vel_(v, 1));
-    const double keep = t > p_.friction * removed ? (t - p_.friction * removed) / t : 0.0;
-    vel_(v, 0) *= keep;
-    vel_(v, 1) *= keep;
-  }
-}
-
 void LatticeDynamics::set_colliders(std::shared_ptr<const Colliders> colliders, double margin) {
   require(std::isfinite(margin) && margin >= 0.0,
           "collider margin must be finite and >= 0 m, got " + std::to_string(margin));
-  colliders_ = std::move(colliders);
-  collider_margin_ = margin;
-  collider_version_ = colliders_ ? colliders_->version() : 0;
-  std::fill(awake_.begin(), awake_.end(), 1);
-}
-
-bool LatticeDynamics::collider_contact(const Eigen::Vector3d& x, ColliderHit& hit) const {
-  // A vertex the last projection left at the margin is in contact: the slack covers the
-  // rounding of that projection (a mesh's trilinear field is not exactly linear along n).
-  constexpr double kSlack = 1e-7;  // m
-  if (!colliders_) return false;
-  hit = colliders_->query(x);
-  return hit.distance < collider_margin_ + kSlack;
-}
-
-void LatticeDynamics::apply_colliders(double h) {
-  // Projection after the substep, as apply_floor does for the floor (docs/dynamics.md §3.2).
-  // The substep's solve did not know the collider, so the vertex's couple partner moved with it
-  // into the collider; the partner takes the same correction (the couple moves as one), or the
-  // top layer would fall through a resting bottom layer by g h^2 every substep.
-  if (!colliders_) return;
-  constexpr int kProjections = 3;  // a mesh's field: a second try lands within ~1e-9 m
-  RowMatX3& x = lat_.positions();
-  const int na = static_cast<int>(active_.size());
-  // Per active vertex, dx and dv of its contact (NaN in dx(0): none), computed in parallel.
-  RowMatX3& dx = x_contact_;
-  RowMatX3& dv = v_contact_;
-  dx.resize(na, 3);
-  dv.resize(na, 3);
-  parallel_for(0, na, kRowCost, [&](long a) {
-    const int v = active_[a];
-    dx(a, 0) = std::numeric_limits<double>::quiet_NaN();
-    Eigen::Vector3d p = x.row(v).transpose();
-    ColliderHit hit = colliders_->query(p);
-    if (!(hit.distance < collider_margin_)) return;
-    for (int k = 0; k < kProjections && hit.distance < collider_margin_; ++k) {
-      p += (collider_margin_ - hit.distance) * hit.normal;
-      hit = colliders_->query(p);
-    }
-    const Eigen::Vector3d n = hit.normal;
-    const Eigen::Vector3d u = vel_.row(v).transpose();
-    const double un = u.dot(n);
-    const double removed = std::max(0.0, -un);
-    const Eigen::Vector3d ut = u - un * n;
-    const double t = ut.norm();
-    const double keep = t > hit.friction * removed ? (t - hit.friction * removed) / t : 0.0;
-    // Friction acts within the substep: the vertex moves with the tangential speed it keeps,
-    // so one held by static friction does not creep down a slope by h^2 g sin(angle) a substep.
-    p -= h * (1.0 - keep) * ut;
-    dx.row(a) = p.transpose() - x.row(v);
-    dv.row(a) = (std::max(un, 0.0) * n + keep * ut - u).transpose();
-  });
-  // Both vertices of a couple in contact: the deeper one's correction moves both (each its own
-  // would squash the couple onto the margin).
-  for (int a = 0; a < na; ++a) {
-    if (std::isnan(dx(a, 0))) continue;
-    const int v = active_[a];
-    const int b = slot_[v ^ 1];  // the couple's other vertex, -1 when it does not move
-    if (b >= 0 && !std::isnan(dx(b, 0))) {
-      const double mine = dx.row(a).squaredNorm(), theirs = dx.row(b).squaredNorm();
-      if (mine < theirs || (mine == theirs && (v & 1))) continue;
-    }
-    x.row(v) += dx.row(a);
-    vel_.row(v) += dv.row(a);
-    if (b >= 0) {
-      x.row(v ^ 1) += dx.row(a);
-      vel_.row(v ^ 1) += dv.row(a);
-    }
-  }
-}
-
-int LatticeDynamics::contact_substeps(double dt) const {
-  // A vertex that may reach a collider this step stops there while its spring neighbours, in the
-  // solve, still move: per substep it may fall (s + |g| h) h into it, s its inward speed. That
-  // must stay within kContactTravel of its shortest spring in the sheet's plane, so:
-  // |g| h^2 + s h <= L. (max_stretch, 1 by default in a Simulation, lets contacts fall through
-  // a couple's thickness: measured, a sheet on a 20 degree slope then slid at half of g sin.)
-  constexpr double kContactTravel = 0.1;
-  if (!colliders_) return 1;
-  const RowMatX3& x = lat_.positions();
-  const double g = p_.gravity.norm();
-  double need = 1.0;
-  for (int v : active_) {
-    const double speed = vel_.row(v).norm();
-    const ColliderHit hit = colliders_->query(x.row(v).transpose());
-    if (!(hit.distance < collider_margin_ + (speed + g * dt) * dt)) continue;
-    double L = std::numeric_limits<double>::infinity();
-    for (int q = inc_start_[v]; q < inc_start_[v + 1]; ++q)
-      if (kind_[inc_spring_[q]] != 3 && rest_len_[inc_spring_[q]] > 0.0) L = std::min(L, rest_len_[inc_spring_[q]]);
-    if (!std::isfinite(L)) continue;
-    L *= kContactTravel;
-    const double s = std::max(0.0, -vel_.row(v).dot(hit.normal));
-    const double hmax = g > 0.0 ? (-s + std::sqrt(s * s + 4.0 * g * L)) / (2.0 * g) : (s > 0.0 ? L / s : dt);
-    need = std::max(need, std::ceil(dt / hmax));
-  }
-  return static_cast<int>(std::min(need, double(p_.max_substeps)));
-}
-
-int LatticeDynamics::wake_stressed_sleepers(double dt) {
-  list_.clear();
-  for (int v : active_)
-    for (int q = inc_start_[v]; q < inc_start_[v + 1]; ++q) {
-      const int o = inc_other_[q];
-      if (!awake_[o] && !pinned_[o] && !mark_[o]) {
-        mark_[o] = 1;
-        list_.push_back(o);
-      }
-    }
-  int woke = 0;
-  for (int o : list_) {
-    mark_[o] = 0;
-    const Eigen::Vector3d f = supported(o, vertex_force(o, lat_.positions(), vel_));
-    if (f.norm() / mass_(o) * dt >= p_.sleep_speed) {
-      awake_[o] = 1;
-      // Woken within wake_hold steps of falling asleep: it flickers, so it stays awake, each
-      // time it flickers again twice as long (up to kMaxHold steps).
-      if (steps_ - slept_at_[o] <= p_.wake_hold) {
-        hold_len_[o] = static_cast<std::uint16_t>(std::clamp(2 * int(hold_len_[o]), p_.wake_hold, kMaxHold));
-        hold_[o] = hold_len_[o];
-      } else {
-        hold_len_[o] = 0;
-      }
-      ++woke;
-    }
-  }
-  return woke;
-}
-
-void LatticeDynamics::update_sleep(double dt) {
-  const RowMatX3& x = lat_.positions();
-  const int na = static_cast<int>(active_.size());
-  // A vertex sleeps when it, and every spring neighbour, is slower than sleep_speed, it was not
-  // forced this step, and its net force (floor reaction included) would not bring it to
-  // sleep_speed within a step.
-  parallel_for(0, na, kRowCost, [&](long a_) {
-    const int a = static_cast<int>(a_);
-    const int v = active_[a];
-    if (hold_[v] > 0) --hold_[v];
-    bool quiet = hold_[v] == 0 && !forced_[v] && vel_.row(v).norm() < p_.sleep_speed;
-    for (int q = inc_start_[v]; quiet && q < inc_start_[v + 1]; ++q)
-      quiet = vel_.row(inc_other_[q]).norm() < p_.sleep_speed;
-    if (quiet) quiet = supported(v, vertex_force(v, x, vel_)).norm() / mass_(v) * dt < p_.sleep_speed;
-    mark_[v] = quiet ? 1 : 0;
-  });
-  // Regions sleep, not stragglers: when the quiet vertices are under 1/kSleepShare of the awake
-  // set, none sleeps this step. A few sleepers inside a moving sheet save little and cost a
-  // redone step or a new factorization each time the motion stresses them awake.
-  int quiet_count = 0;
-  for (int v : active_) quiet_count += mark_[v];
-  const bool bulk = quiet_count * kSleepShare >= na;
-  for (int v : active_) {
-    if (mark_[v] && bulk) {
-      awake_[v] = 0;
-      slept_at_[v] = steps_;
-      vel_.row(v).setZero();
-      accel_.row(v).setZero();
-    }
-    mark_[v] = 0;
-  }
+  contacts_.set_colliders(std::move(colliders), margin);
+  sleep_.wake_all();
 }
 
 StepStats LatticeDynamics::step(double dt, const Eigen::VectorXd& D, const Eigen::VectorXd& heat) {
@@ -1576,7 +799,7 @@ StepStats LatticeDynamics::step(double dt, const Eigen::VectorXd& D, const Eigen
   require(D.allFinite(), "D must be finite");
   require(heat.allFinite(), "heat must be finite");
   StepStats st;
-  factorizations_ = 0;
+  solver_.reset_count();
   heat_save_ = heat_;
   heat_ = heat;
   delta_ = p_.crumple_gain * (D - D_prev_);
@@ -1591,29 +814,31 @@ StepStats LatticeDynamics::step(double dt, const Eigen::VectorXd& D, const Eigen
   } else {
     disp_.setZero();
   }
+  std::vector<std::uint8_t>& forced = sleep_.forced();
   for (int v = 0; v < n_; ++v)
-    forced_[v] = disp_.row(v).squaredNorm() > 0.0 || (p_.bimetal && delta_(v / 2) != 0.0) ||
-                 std::abs(p_.buoyancy * (heat_(v) - heat_prev_(v))) * dt >= p_.sleep_speed;
-  if (bimetal && bimetal_all_) std::fill(awake_.begin(), awake_.end(), 1);
-  if (colliders_ && colliders_->version() != collider_version_) {  // a collider moved
-    std::fill(awake_.begin(), awake_.end(), 1);
-    collider_version_ = colliders_->version();
-  }
+    forced[v] = disp_.row(v).squaredNorm() > 0.0 || (p_.bimetal && delta_(v / 2) != 0.0) ||
+                std::abs(p_.buoyancy * (heat_(v) - heat_prev_(v))) * dt >= p_.sleep_speed;
+  if (bimetal && bimetal_all_) sleep_.wake_all();
+  if (contacts_.colliders_moved()) sleep_.wake_all();
   if (!p_.sleeping)
-    std::fill(awake_.begin(), awake_.end(), 1);
+    sleep_.wake_all();
   else
-    wake_around_forcing();
+    sleep_.wake_around_forcing(vel_);
   drift_ = disp_ / dt;
   const bool plastic = crumple && !p_.bimetal && p_.plasticity > 0.0;
   if (plastic || bimetal) {
     rest_save_ = rest_len_;
     if (membrane_) membrane_rest_save_ = membrane_->rest();
   }
-  if (bimetal) apply_bimetal(D, bimetal_all_);
+  if (bimetal) bimetal_.apply(D, delta_, bimetal_all_, membrane_.get());
+  // What would set a vertex moving: its force less what a floor or a collider it rests on takes.
+  const Sleeping::NetForce net_force = [this](int v) {
+    return contacts_.supported(v, vertex_force(v, lat_.positions(), vel_));
+  };
   bool plastic_done = false;
   try {
     for (int pass = 1;; ++pass) {
-      collect_active();
+      sleep_.collect_active();
       st.passes = pass;
       st.awake = static_cast<int>(active_.size());
       st.omega_max = omega_bound(active_);
@@ -1628,7 +853,7 @@ StepStats LatticeDynamics::step(double dt, const Eigen::VectorXd& D, const Eigen
       if (!p_.sleeping || pass >= kMaxPasses) break;
       // Redo the step with the sleepers its motion stressed awake, unless they are few next to
       // the awake set: those join the next step (a step late) rather than cost a whole pass.
-      const int woke = wake_stressed_sleepers(dt);
+      const int woke = sleep_.wake_stressed_sleepers(dt, net_force);
       if (woke == 0 || woke * kRedoShare < st.awake) break;
       for (int a = 0; a < st.awake; ++a) {
         lat_.positions().row(active_[a]) = x_save_.row(a);
@@ -1645,12 +870,12 @@ StepStats LatticeDynamics::step(double dt, const Eigen::VectorXd& D, const Eigen
     throw;
   }
   if (bimetal) bimetal_all_ = false;
-  st.factorizations = factorizations_;
+  st.factorizations = solver_.factorizations();
   D_prev_ = D;
-  if (p_.sleeping) update_sleep(dt);
-  ++steps_;
+  if (p_.sleeping) sleep_.update_sleep(dt, vel_, accel_, net_force);
+  sleep_.end_step();
   for (int v = 0; v < n_; ++v)
-    if (awake_[v]) heat_prev_(v) = heat_(v);
+    if (sleep_.awake()[v]) heat_prev_(v) = heat_(v);
   return st;
 }
 

@@ -11,11 +11,15 @@
 #include <memory>
 #include <vector>
 
+#include "bimetal.hpp"
 #include "colliders.hpp"
+#include "contact.hpp"
+#include "implicit_solver.hpp"
 #include "lattice.hpp"
 #include "membrane.hpp"
 #include "param_table.hpp"
 #include "self_contact.hpp"
+#include "sleeping.hpp"
 
 namespace thinburn {
 
@@ -231,18 +235,14 @@ class LatticeDynamics {
   int membrane_springs() const { return membrane_ ? membrane_->size() : 0; }
 
  private:
-  struct Factor;
   void build_springs();
   void build_incidence();
-  void add_spring_geometry();
   double spring_k(int s) const;
   double layer_k(int kind) const;
   double target_share() const;
   void add_membrane();
   void refresh_membrane();
   void refresh_spring_scale();
-  void wake_rings(std::vector<std::uint8_t>& flag, int rings) const;
-  void collect_active();
   double omega_bound(const std::vector<int>& verts) const;
   Eigen::Vector3d vertex_force(int v, const RowMatX3& x, const RowMatX3& vel) const;
   Eigen::Vector3d couple_normal(int v, const RowMatX3& x) const;
@@ -254,39 +254,11 @@ class LatticeDynamics {
   int implicit_substep(double h);
   void implicit_assemble(double h);
   void implicit_rhs(double h);
-  int implicit_solve(double h);
-  bool use_ldlt() const;
-  void refresh_factor(double h);
-  void build_jacobi(double h);
-  void factor_pattern();
-  void factor_fill(double h);
-  bool add_landings(double h);
-  Eigen::Vector3d substep_drift(int v, double h) const;
-  void apply_A(double h, const double* in, double* out);
-  void precondition(const double* in, double* out);
-  void apply_floor(double h);
-  void apply_colliders(double h);
-  int contact_substeps(double dt) const;
-  bool collider_contact(const Eigen::Vector3d& x, ColliderHit& hit) const;
   void apply_plasticity();
-  void build_bimetal();
-  void apply_bimetal(const Eigen::VectorXd& D, bool all);
-  double bimetal_ratio(int s, double kappa) const;
   void remove_crumple_translation();
-  int wake_stressed_sleepers(double dt);
-  void update_sleep(double dt);
-  Eigen::Vector3d supported(int v, Eigen::Vector3d f) const;
-  void wake_around_forcing();
-
-  double floor_at(int v) const { return floor_offset_.size() ? p_.floor_z + floor_offset_[v] : p_.floor_z; }
 
   FfdLattice& lat_;
   DynamicsParams p_;
-  Eigen::VectorXd floor_offset_;  // per vertex, empty: none
-  std::shared_ptr<const Colliders> colliders_;  // null: none
-  double collider_margin_ = 0.0;
-  std::uint64_t collider_version_ = 0;  // colliders_->version() when the sheet last woke for it
-  RowMatX3 x_contact_, v_contact_;      // apply_colliders' per-active-vertex corrections
   LatticeTopology topo_;
   int C_, n_;  // couples, control vertices
   // Springs: endpoints, kind, rest length; per-vertex incidence (CSR, fixed order).
@@ -295,28 +267,12 @@ class LatticeDynamics {
   std::vector<double> rest_len_;
   std::vector<double> spring_scale_;  // per spring: stiffness share kept (set_strength), 1 intact
   Eigen::VectorXd strength_;
-  std::vector<double> base_len_;      // rest lengths of the rest lattice (bimetal scales them)
-  std::vector<double> mid_sep_;       // per spring: rest distance between its couples' centres
-  std::vector<double> off_a_, off_b_; // per spring: its ends' offsets from the mid-surface (+ top)
-  Eigen::VectorXd couple_spacing_;    // per couple: mean rest distance to its axis neighbours
-  RowMatX3 grad_dir_;                 // per couple: unit direction in which D grows (rest frame)
-  Eigen::VectorXd grad_share_;        // per couple: how much of the curl follows it (0: isotropic)
-  std::vector<std::uint8_t> changed_; // per couple: its springs' rest lengths are recomputed this step
   bool bimetal_all_ = true;           // the next bimetal step recomputes every spring
-  std::vector<int> inc_start_, inc_spring_, inc_other_;
+  SpringIncidence inc_;
   std::unique_ptr<Membrane> membrane_;  // null while the layers bend as the lattice's own
   double bend_share_ = 1.0;             // bending_share()
   std::vector<double> membrane_rest_save_;
   std::vector<int> vert_spring_;    // per couple: its top-bottom spring
-  Eigen::VectorXd contact_;         // per vertex: floor impulse per mass of this substep, -1 if free
-  std::vector<std::uint8_t> stick_; // per vertex: a contact held by static friction this substep
-  // The implicit solve's filter (Baraff and Witkin's S): a contact's v_z, and a sticking
-  // contact's whole velocity, are prescribed; filter() zeroes those components of a 3-vector.
-  bool filtered(int v, int i) const { return contact_(v) >= 0.0 && (i == 2 || stick_[v]); }
-  void filter(int v, double* x3) const {
-    for (int i = 0; i < 3; ++i)
-      if (filtered(v, i)) x3[i] = 0.0;
-  }
   RowMatX3 vel_, drift_, disp_;
   RowMatX3 accel_;                  // last implicit acceleration per vertex: the CG warm start
   // BDF2's history: each vertex's state at the start of the substep it last took part in, that
@@ -330,23 +286,18 @@ class LatticeDynamics {
   Eigen::VectorXd mass_, area_, heat_, heat_prev_, D_prev_, delta_;
   Eigen::Vector3d wind_{0, 0, 0};
   RowMatX3 wind_field_;             // per vertex (set_wind_field), 0 rows: wind_ everywhere
-  std::vector<std::uint8_t> pinned_, awake_, forced_;
-  std::vector<std::uint16_t> hold_;  // steps a flickering sleeper still stays awake
-  std::vector<std::uint16_t> hold_len_;  // the length of its last hold (doubles per flicker)
-  std::vector<std::int64_t> slept_at_;  // step at which each vertex last fell asleep
-  std::int64_t steps_ = 0;          // steps taken
-  std::vector<int> active_, slot_;  // active vertices; slot_[v] = position in active_ or -1
-  bool first_step_ = true;
-  std::vector<std::uint8_t> mark_;  // scratch flags, all zero between uses
-  std::vector<int> list_;           // scratch vertex list
-  std::vector<double> work_;        // CG and Jacobian buffers, reused
+  std::vector<std::uint8_t> pinned_;
   RowMatX3 x_save_, v_save_;        // active vertices' state at the start of a pass
   Eigen::VectorXd heat_save_;        // restored, with rest_save_, when a step throws
   std::vector<double> rest_save_;
-  std::unique_ptr<Factor> factor_;
   std::unique_ptr<SelfContact> self_contact_;  // after each substep, as apply_colliders
-  int factorizations_ = 0;          // of the step in progress
-  bool precond_ldlt_ = false;       // the solve in progress uses factor_
+  // The concerns split off, in this order (each views the members above and those before it).
+  Bimetal bimetal_;                 // the curl's rest lengths
+  Sleeping sleep_;                  // who is awake; the active set
+  const std::vector<int>& active_ = sleep_.active();  // active vertices, in index order
+  const std::vector<int>& slot_ = sleep_.slot();      // per vertex: position in active_ or -1
+  Contacts contacts_;               // floor and colliders
+  ImplicitSolver solver_;           // the implicit substeps' linear solve
 };
 
 }  // namespace thinburn

@@ -92,6 +92,22 @@ struct LatticeTopology {
   int springs() const { return static_cast<int>(kind.size()); }
 };
 
+/// @brief Per control vertex, the springs that touch it (CSR, in spring order): vertex v's are
+/// spring[q] for q in [start[v], start[v + 1]), other[q] the spring's far end.
+struct SpringIncidence {
+  std::vector<int> start, spring, other;
+};
+
+/// @brief Centre of couple c (the mean of its two vertices' rows in x).
+inline Eigen::Vector3d couple_centre(const RowMatX3& x, int c) {
+  return 0.5 * (x.row(2 * c) + x.row(2 * c + 1)).transpose();
+}
+
+/// Work of one item of a loop over the lattice, in kParallelWork's units (threads.hpp): a
+/// vertex's or a spring's row of forces, Jacobian or CG product is about 32. So a loop over
+/// fewer than about 1000 vertices stays on one thread.
+constexpr long kRowCost = 32;
+
 /// @brief The paper's M x M lattice (§4.1, Fig. 3): structure, shear and flex springs per layer,
 /// then per couple its thickness spring and the transverse pairs to its +j and +i neighbours;
 /// neighbours in the order (i-1, j), (i+1, j), (i, j-1), (i, j+1).

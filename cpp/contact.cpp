@@ -1,0 +1,272 @@
+#include "contact.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "dynamics.hpp"
+#include "threads.hpp"
+
+namespace thinburn {
+
+Contacts::Contacts(int n, const View& view) : s_(view) {
+  contact_ = Eigen::VectorXd::Constant(n, -1.0);
+  stick_.assign(n, 0);
+  list_.reserve(n);
+}
+
+double Contacts::floor_at(int v) const {
+  return floor_offset_.size() ? s_.p.floor_z + floor_offset_[v] : s_.p.floor_z;
+}
+
+void Contacts::set_colliders(std::shared_ptr<const Colliders> colliders, double margin) {
+  colliders_ = std::move(colliders);
+  collider_margin_ = margin;
+  collider_version_ = colliders_ ? colliders_->version() : 0;
+}
+
+bool Contacts::colliders_moved() {
+  if (!colliders_ || colliders_->version() == collider_version_) return false;
+  collider_version_ = colliders_->version();
+  return true;
+}
+
+void Contacts::decide(int v, double h, const Eigen::Vector3d& f) {
+  const RowMatX3& x = s_.lattice.positions();
+  const RowMatX3& vel = s_.vel;
+  const Eigen::VectorXd& mass = s_.mass;
+  contact_(v) = -1.0;
+  stick_[v] = 0;
+  if (s_.p.has_floor && x(v, 2) <= floor_at(v)) {
+    const double vz_free = vel(v, 2) + h * f.z() / mass(v);
+    if (vz_free <= 0.0) {
+      contact_(v) = -vz_free;
+      // Static friction inside the solve: a contact whose tangential speed at the substep's
+      // end (explicit guess) the floor's friction impulse (friction x the normal speed it
+      // removes) can absorb sticks, all three velocity components filtered to zero. Applied
+      // after the solve instead, friction stopped such a vertex only once its neighbours had
+      // been solved as if it slid, and a sheet a light wind pushed crept across its table
+      // by an amount proportional to the substep (the demo's A4 in 3 m/s wind: 0.39 m in
+      // 20 s at dt = 1/24 s, against 7 mm with the symplectic integrator's small substeps).
+      const double tx = vel(v, 0) + h * f.x() / mass(v), ty = vel(v, 1) + h * f.y() / mass(v);
+      // A contact that Fig. 5's prescribed crumple moves this step follows it (the chord's
+      // in-plane part is what lets its neighbours lift): it slides, as before.
+      stick_[v] = s_.p.friction > 0.0 && s_.drift.row(v).squaredNorm() == 0.0 &&
+                  std::hypot(tx, ty) <= s_.p.friction * contact_(v);
+    }
+  }
+}
+
+Eigen::Vector3d Contacts::substep_drift(int v, double h) const {
+  Eigen::Vector3d u = s_.drift.row(v).transpose();
+  // A floor contact ends the substep on the floor (B&W's position alteration y = h u), lifted
+  // only by the crumple: this also lands a contact that starts above the floor.
+  // Static friction also holds it in place against the crumple's sliding: the crumple lifts a
+  // resting sheet off the table but does not drag it across. Without this, repeated crumples
+  // with plastic rest lengths walk a sheet across the floor like an inchworm.
+  if (s_.slot[v] >= 0 && contact_(v) >= 0.0) {
+    u.z() = std::max(u.z(), 0.0) + (floor_at(v) - s_.lattice.positions()(v, 2)) / h;
+    if (s_.p.friction > 0.0) u.x() = u.y() = 0.0;
+  }
+  return u;
+}
+
+bool Contacts::add_landings(double h, double* dv) {
+  // The contact test before the solve sees only vertices already on the floor, with an explicit
+  // guess of their velocity. A vertex a hair above the floor (lifted by a crumple, or by
+  // rounding), or one the guess let go, is free in the solve, and a frame-sized substep then
+  // carries it, and its whole couple, far below the floor (g dt^2 = 17 mm at 1/24 s); projecting
+  // both layers back onto the floor flattened the couple. Such vertices become contacts and the
+  // system is solved again. Of a couple only the vertex that ends lower lands first: its partner
+  // is below the floor only because it fell with it, and the stiff top-bottom spring holds it
+  // once the lower one is stopped (it lands in a later round if it still goes below).
+  if (!s_.p.has_floor) return false;
+  const RowMatX3& x = s_.lattice.positions();
+  const RowMatX3& vel = s_.vel;
+  auto end_z = [&](int v) {  // where the solution takes v this substep
+    const int a = s_.slot[v];
+    if (a < 0) return x(v, 2);
+    return x(v, 2) + h * (vel(v, 2) + dv[3 * a + 2] + substep_drift(v, h).z());
+  };
+  list_.clear();
+  for (int v : s_.active) {
+    if (contact_(v) >= 0.0) continue;
+    const double z = end_z(v);
+    const int partner = v ^ 1;
+    const bool partner_down = s_.slot[partner] >= 0 && contact_(partner) >= 0.0;
+    if (z < floor_at(v) && (partner_down || z <= end_z(partner))) list_.push_back(v);
+  }
+  for (int v : list_) {  // after the loop: the test above reads contact_ of partners
+    const int a = s_.slot[v];
+    contact_(v) = std::max(0.0, -(vel(v, 2) + dv[3 * a + 2]));
+    dv[3 * a + 2] = -vel(v, 2);
+  }
+  return !list_.empty();
+}
+
+void Contacts::settle(int v, double h) {
+  // A contact lands exactly on the floor (+ the crumple's lift), not a rounding below or
+  // above it, so that the next substep's contact test finds it there.
+  if (contact_(v) >= 0.0) s_.lattice.positions()(v, 2) = floor_at(v) + h * std::max(s_.drift(v, 2), 0.0);
+}
+
+void Contacts::press(int v) {
+  // A vertex resting on the floor that the substep presses into it: the floor takes the
+  // normal speed and friction the tangential one before the position moves. Applied after
+  // the move (apply_floor alone), each substep let a resting vertex slide h^2 a_t first, and
+  // a sheet that a light wind pushed crept across its table by T h a_t (the demo's A4 in
+  // 3 m/s wind: 9 mm in 20 s at h = 1/6000 s).
+  RowMatX3& vel = s_.vel;
+  if (s_.p.has_floor && s_.lattice.positions()(v, 2) <= floor_at(v) && vel(v, 2) <= 0.0) {
+    const double removed = -vel(v, 2), t = std::hypot(vel(v, 0), vel(v, 1));
+    const double keep = t > s_.p.friction * removed ? (t - s_.p.friction * removed) / t : 0.0;
+    vel(v, 0) *= keep;
+    vel(v, 1) *= keep;
+    vel(v, 2) = 0.0;
+  }
+}
+
+void Contacts::apply_floor(double h) {
+  if (!s_.p.has_floor) return;
+  RowMatX3& x = s_.lattice.positions();
+  RowMatX3& vel = s_.vel;
+  const bool implicit = is_implicit(s_.p.integrator);
+  for (int v : s_.active) {
+    // Coulomb friction: the tangential speed drops by friction times the normal speed the
+    // floor removed (from the contact filter, or from the projection below).
+    double removed = -1.0;
+    if (implicit && contact_(v) >= 0.0) removed = contact_(v);
+    if (x(v, 2) < floor_at(v)) {
+      removed = std::max(0.0, -vel(v, 2));
+      x(v, 2) = floor_at(v);
+      vel(v, 2) = std::max(0.0, vel(v, 2));
+    }
+    if (removed < 0.0) continue;
+    const double t = std::hypot(vel(v, 0), vel(v, 1));
+    const double keep = t > s_.p.friction * removed ? (t - s_.p.friction * removed) / t : 0.0;
+    vel(v, 0) *= keep;
+    vel(v, 1) *= keep;
+  }
+}
+
+bool Contacts::collider_contact(const Eigen::Vector3d& x, ColliderHit& hit) const {
+  // A vertex the last projection left at the margin is in contact: the slack covers the
+  // rounding of that projection (a mesh's trilinear field is not exactly linear along n).
+  constexpr double kSlack = 1e-7;  // m
+  if (!colliders_) return false;
+  hit = colliders_->query(x);
+  return hit.distance < collider_margin_ + kSlack;
+}
+
+void Contacts::apply_colliders(double h) {
+  // Projection after the substep, as apply_floor does for the floor (docs/dynamics.md §3.2).
+  // The substep's solve did not know the collider, so the vertex's couple partner moved with it
+  // into the collider; the partner takes the same correction (the couple moves as one), or the
+  // top layer would fall through a resting bottom layer by g h^2 every substep.
+  if (!colliders_) return;
+  constexpr int kProjections = 3;  // a mesh's field: a second try lands within ~1e-9 m
+  RowMatX3& x = s_.lattice.positions();
+  RowMatX3& vel = s_.vel;
+  const std::vector<int>& active = s_.active;
+  const int na = static_cast<int>(active.size());
+  // Per active vertex, dx and dv of its contact (NaN in dx(0): none), computed in parallel.
+  RowMatX3& dx = x_contact_;
+  RowMatX3& dv = v_contact_;
+  dx.resize(na, 3);
+  dv.resize(na, 3);
+  parallel_for(0, na, kRowCost, [&](long a) {
+    const int v = active[a];
+    dx(a, 0) = std::numeric_limits<double>::quiet_NaN();
+    Eigen::Vector3d p = x.row(v).transpose();
+    ColliderHit hit = colliders_->query(p);
+    if (!(hit.distance < collider_margin_)) return;
+    for (int k = 0; k < kProjections && hit.distance < collider_margin_; ++k) {
+      p += (collider_margin_ - hit.distance) * hit.normal;
+      hit = colliders_->query(p);
+    }
+    const Eigen::Vector3d n = hit.normal;
+    const Eigen::Vector3d u = vel.row(v).transpose();
+    const double un = u.dot(n);
+    const double removed = std::max(0.0, -un);
+    const Eigen::Vector3d ut = u - un * n;
+    const double t = ut.norm();
+    const double keep = t > hit.friction * removed ? (t - hit.friction * removed) / t : 0.0;
+    // Friction acts within the substep: the vertex moves with the tangential speed it keeps,
+    // so one held by static friction does not creep down a slope by h^2 g sin(angle) a substep.
+    p -= h * (1.0 - keep) * ut;
+    dx.row(a) = p.transpose() - x.row(v);
+    dv.row(a) = (std::max(un, 0.0) * n + keep * ut - u).transpose();
+  });
+  // Both vertices of a couple in contact: the deeper one's correction moves both (each its own
+  // would squash the couple onto the margin).
+  for (int a = 0; a < na; ++a) {
+    if (std::isnan(dx(a, 0))) continue;
+    const int v = active[a];
+    const int b = s_.slot[v ^ 1];  // the couple's other vertex, -1 when it does not move
+    if (b >= 0 && !std::isnan(dx(b, 0))) {
+      const double mine = dx.row(a).squaredNorm(), theirs = dx.row(b).squaredNorm();
+      if (mine < theirs || (mine == theirs && (v & 1))) continue;
+    }
+    x.row(v) += dx.row(a);
+    vel.row(v) += dv.row(a);
+    if (b >= 0) {
+      x.row(v ^ 1) += dx.row(a);
+      vel.row(v ^ 1) += dv.row(a);
+    }
+  }
+}
+
+int Contacts::contact_substeps(double dt) const {
+  // A vertex that may reach a collider this step stops there while its spring neighbours, in the
+  // solve, still move: per substep it may fall (s + |g| h) h into it, s its inward speed. That
+  // must stay within kContactTravel of its shortest spring in the sheet's plane, so:
+  // |g| h^2 + s h <= L. (max_stretch, 1 by default in a Simulation, lets contacts fall through
+  // a couple's thickness: measured, a sheet on a 20 degree slope then slid at half of g sin.)
+  constexpr double kContactTravel = 0.1;
+  if (!colliders_) return 1;
+  const RowMatX3& x = s_.lattice.positions();
+  const SpringIncidence& inc = s_.incidence;
+  const double g = s_.p.gravity.norm();
+  double need = 1.0;
+  for (int v : s_.active) {
+    const double speed = s_.vel.row(v).norm();
+    const ColliderHit hit = colliders_->query(x.row(v).transpose());
+    if (!(hit.distance < collider_margin_ + (speed + g * dt) * dt)) continue;
+    double L = std::numeric_limits<double>::infinity();
+    for (int q = inc.start[v]; q < inc.start[v + 1]; ++q)
+      if (s_.kind[inc.spring[q]] != 3 && s_.rest_len[inc.spring[q]] > 0.0) L = std::min(L, s_.rest_len[inc.spring[q]]);
+    if (!std::isfinite(L)) continue;
+    L *= kContactTravel;
+    const double s = std::max(0.0, -s_.vel.row(v).dot(hit.normal));
+    const double hmax = g > 0.0 ? (-s + std::sqrt(s * s + 4.0 * g * L)) / (2.0 * g) : (s > 0.0 ? L / s : dt);
+    need = std::max(need, std::ceil(dt / hmax));
+  }
+  return static_cast<int>(std::min(need, double(s_.p.max_substeps)));
+}
+
+Eigen::Vector3d Contacts::supported(int v, Eigen::Vector3d f) const {
+  const RowMatX3& x = s_.lattice.positions();
+  if (s_.p.has_floor && x(v, 2) <= floor_at(v) && f.z() < 0.0) {
+    const double normal = -f.z();
+    f.z() = 0.0;
+    const double t = std::hypot(f.x(), f.y());
+    const double keep = t > s_.p.friction * normal ? (t - s_.p.friction * normal) / t : 0.0;
+    f.x() *= keep;
+    f.y() *= keep;
+  }
+  // A collider holds a vertex resting on it the same way: the inward push is taken, and static
+  // friction takes up to friction times that of the tangential force.
+  ColliderHit hit;
+  if (collider_contact(x.row(v).transpose(), hit)) {
+    const double fn = f.dot(hit.normal);
+    if (fn < 0.0) {
+      const Eigen::Vector3d ft = f - fn * hit.normal;
+      const double t = ft.norm();
+      const double keep = t > hit.friction * -fn ? (t - hit.friction * -fn) / t : 0.0;
+      f = keep * ft;
+    }
+  }
+  return f;
+}
+
+}  // namespace thinburn

@@ -1,0 +1,92 @@
+#pragma once
+/// @brief The lattice's contacts with the floor and with collision objects (docs/dynamics.md
+/// §3, §3.2): which vertices touch the floor in an implicit substep (the solve's filter), the
+/// crumple's drift of a contact, the landings found after a solve, the projections after each
+/// substep, the substeps contacts need, and the force a contact leaves a resting vertex.
+#include <Eigen/Core>
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "colliders.hpp"
+#include "lattice.hpp"
+
+namespace thinburn {
+
+struct DynamicsParams;
+
+class Contacts {
+ public:
+  /// @brief State of the lattice these contacts act on, kept by reference (the dynamics owns it).
+  struct View {
+    FfdLattice& lattice;               // positions
+    RowMatX3& vel;                     // velocities, m/s
+    const RowMatX3& drift;             // per vertex: the crumple's prescribed velocity this step
+    const Eigen::VectorXd& mass;       // kg per vertex
+    const std::vector<int>& active;    // the vertices integrated
+    const std::vector<int>& slot;      // per vertex: its position in active, -1 if not in it
+    const SpringIncidence& incidence;
+    const std::vector<std::uint8_t>& kind;  // per spring (3: a couple's top-bottom spring)
+    const std::vector<double>& rest_len;    // per spring, m
+    const DynamicsParams& p;
+  };
+  Contacts(int n, const View& view);
+
+  /// @brief Per vertex, its height above floor_z at which it touches the floor (empty: 0).
+  void set_floor_offsets(const Eigen::VectorXd& offsets) { floor_offset_ = offsets; }
+  /// @brief The floor's height under vertex v, m.
+  double floor_at(int v) const;
+  /// @brief Collision objects (null: none) and their margin (m, >= 0).
+  void set_colliders(std::shared_ptr<const Colliders> colliders, double margin);
+  /// @brief True once after each change of the colliders' version (a collider moved).
+  bool colliders_moved();
+
+  // The implicit solve's filter (Baraff and Witkin's S): a contact's v_z, and a sticking
+  // contact's whole velocity, are prescribed; filter() zeroes those components of a 3-vector.
+  bool in_contact(int v) const { return contact_(v) >= 0.0; }
+  bool filtered(int v, int i) const { return contact_(v) >= 0.0 && (i == 2 || stick_[v]); }
+  void filter(int v, double* x3) const {
+    for (int i = 0; i < 3; ++i)
+      if (filtered(v, i)) x3[i] = 0.0;
+  }
+
+  /// @brief Implicit substep h: decide whether active vertex v, under force f, is a floor
+  /// contact and whether it sticks.
+  void decide(int v, double h, const Eigen::Vector3d& f);
+  /// @brief The velocity a vertex's position moves by this substep besides its own: the
+  /// crumple's drift, and for a floor contact what lands it on the floor (and holds it there).
+  Eigen::Vector3d substep_drift(int v, double h) const;
+  /// @brief After an implicit solve (dv: 3 per active vertex, the velocity change): make the
+  /// vertices it takes below the floor contacts, with dv's v_z prescribed; true if any.
+  bool add_landings(double h, double* dv);
+  /// @brief After an implicit substep's move: a contact sits exactly on the floor.
+  void settle(int v, double h);
+  /// @brief Explicit substep, before the move: a vertex resting on the floor that the substep
+  /// presses into it loses its normal speed and, by friction, its tangential speed.
+  void press(int v);
+  /// @brief After each substep: project the active vertices below the floor onto it, with
+  /// Coulomb friction on what the floor removed.
+  void apply_floor(double h);
+  /// @brief After each substep: push the active vertices inside a collider's margin out.
+  void apply_colliders(double h);
+  /// @brief Substeps of a step dt that the vertices nearing a collider need.
+  int contact_substeps(double dt) const;
+  /// @brief f less what a floor or a collider that vertex v rests on takes of it.
+  Eigen::Vector3d supported(int v, Eigen::Vector3d f) const;
+
+ private:
+  bool collider_contact(const Eigen::Vector3d& x, ColliderHit& hit) const;
+
+  View s_;
+  Eigen::VectorXd floor_offset_;  // per vertex, empty: none
+  std::shared_ptr<const Colliders> colliders_;  // null: none
+  double collider_margin_ = 0.0;
+  std::uint64_t collider_version_ = 0;  // colliders_->version() when the sheet last woke for it
+  RowMatX3 x_contact_, v_contact_;      // apply_colliders' per-active-vertex corrections
+  Eigen::VectorXd contact_;         // per vertex: floor impulse per mass of this substep, -1 if free
+  std::vector<std::uint8_t> stick_; // per vertex: a contact held by static friction this substep
+  std::vector<int> list_;           // scratch vertex list
+};
+
+}  // namespace thinburn

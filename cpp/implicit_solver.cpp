@@ -1,0 +1,313 @@
+#include "implicit_solver.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include <Eigen/LU>
+
+#include "block_ldlt.hpp"
+#include "dynamics.hpp"
+#include "threads.hpp"
+
+namespace thinburn {
+namespace {
+
+constexpr int kDotChunk = 4096;
+
+// Sum of a[i] * b[i] in fixed chunks summed in order: the same bits for any thread count.
+double det_dot(const double* a, const double* b, int len, double* partial) {
+  const int chunks = (len + kDotChunk - 1) / kDotChunk;
+  parallel_for(0, chunks, kDotChunk, [&](long c_) {
+    const int c = static_cast<int>(c_);
+    double s = 0.0;
+    const int end = std::min(len, (c + 1) * kDotChunk);
+    for (int i = c * kDotChunk; i < end; ++i) s += a[i] * b[i];
+    partial[c] = s;
+  });
+  double t = 0.0;
+  for (int c = 0; c < chunks; ++c) t += partial[c];
+  return t;
+}
+
+}  // namespace
+
+// The implicit system over the active vertices, lower triangle of 3x3 blocks by columns, and its
+// sparse block LDL^T factorization (block_ldlt.hpp), the conjugate gradients' preconditioner.
+// The pattern depends only on the active set: values are refilled in the order the pattern was
+// built, and the symbolic analysis (AMD ordering, elimination tree) is redone only when the
+// active set changes. The numeric factorization is kept over substeps and steps (masses,
+// lengths and contacts change slowly), and over changes of the active set, until a solve needs
+// more than refactor_iterations iterations or the active set has moved too far from the
+// factored one.
+struct ImplicitSolver::Factor {
+  std::vector<int> active;      // the active set the pattern was built for
+  std::vector<int> slot;        // per vertex: its position in `active`, -1 if not in it
+  std::vector<int> blk_start;   // per active vertex: its column's 3x3 blocks in blk_row/blk_spring
+  std::vector<int> blk_row;     // row slot of each block; the vertex itself (diagonal) first
+  std::vector<int> blk_spring;  // the spring of an off-diagonal block, -1 on the diagonal
+  std::vector<std::pair<int, int>> sort_buf;
+  std::vector<double> values;   // 9 per block of blk_row, column-major
+  BlockLdlt ldlt;
+  Eigen::VectorXd rhs;
+  bool analysed = false;  // ldlt holds the symbolic analysis of `active`
+  bool valid = false;     // ldlt holds a numeric factorization of `active`'s system
+  bool stale = false;     // the last solve took too many iterations: refactor before the next
+};
+
+ImplicitSolver::ImplicitSolver(const View& view) : s_(view), factor_(std::make_unique<Factor>()) {}
+
+ImplicitSolver::~ImplicitSolver() = default;
+
+void ImplicitSolver::resize(std::size_t springs, std::size_t vertices) {
+  // 6 per spring (Jacobian blocks), 27 per vertex (diagonal block and the two blocks of its row
+  // of the couple-block preconditioner), 3 per vertex for each of the CG vectors and the
+  // forces and the right-hand side's motion, and the dot-product partials.
+  ns_ = springs;
+  n_ = vertices;
+  work_.assign(6 * ns_ + 27 * n_ + 8 * 3 * n_ + (3 * n_) / kDotChunk + 2, 0.0);
+  factor_ = std::make_unique<Factor>();  // the pattern may have gained blocks
+}
+
+ImplicitSolver::Buffers ImplicitSolver::buffers() {
+  Buffers B;
+  double* q = work_.data();
+  B.jac = q;
+  q += 6 * ns_;
+  B.diag = q;
+  q += 9 * n_;
+  B.pinv = q;
+  q += 18 * n_;
+  double** vecs[8] = {&B.f, &B.b, &B.dv, &B.r, &B.z, &B.p, &B.Ap, &B.w};
+  for (double** v : vecs) {
+    *v = q;
+    q += 3 * n_;
+  }
+  B.partial = q;
+  return B;
+}
+
+void ImplicitSolver::build_jacobi(double h) {
+  Buffers B = buffers();
+  const int na = static_cast<int>(s_.active.size());
+  const double h2 = h * h;
+  // Couple-block Jacobi: the top-bottom spring is the stiffest, so both vertices of a couple are
+  // inverted together (6 x 6); a vertex whose partner is not active gets its 3 x 3 inverse.
+  parallel_for(0, na, kRowCost, [&](long a_) {
+    const int a = static_cast<int>(a_);
+    const int v = s_.active[a], pa = s_.slot[v ^ 1];
+    if (pa < 0) {
+      mat3(B.pinv, 2 * a) = mat3(B.diag, a).inverse();
+      mat3(B.pinv, 2 * a + 1).setZero();
+      return;
+    }
+    Eigen::Matrix<double, 6, 6> C;
+    const Eigen::Matrix3d J = load_sym(B.jac + 6 * s_.couple_spring[v / 2]);
+    C.topLeftCorner<3, 3>() = mat3(B.diag, a);
+    C.bottomRightCorner<3, 3>() = mat3(B.diag, pa);
+    C.topRightCorner<3, 3>() = -h2 * J;
+    C.bottomLeftCorner<3, 3>() = -h2 * J;
+    const Eigen::Matrix<double, 6, 6> Ci = C.inverse();
+    mat3(B.pinv, 2 * a) = Ci.topLeftCorner<3, 3>();
+    mat3(B.pinv, 2 * a + 1) = Ci.topRightCorner<3, 3>();
+  });
+}
+
+void ImplicitSolver::apply_A(double h, const double* in, double* out) {
+  Buffers B = buffers();
+  const int na = static_cast<int>(s_.active.size());
+  const double h2 = h * h;
+  parallel_for(0, na, kRowCost, [&](long a_) {
+    const int a = static_cast<int>(a_);
+    const int v = s_.active[a];
+    Eigen::Vector3d y = mat3(B.diag, a) * Eigen::Map<const Eigen::Vector3d>(in + 3 * a);
+    for (int q = s_.incidence.start[v]; q < s_.incidence.start[v + 1]; ++q) {
+      const int so = s_.slot[s_.incidence.other[q]];
+      if (so >= 0)
+        y -= h2 * load_sym(B.jac + 6 * s_.incidence.spring[q]) * Eigen::Map<const Eigen::Vector3d>(in + 3 * so);
+    }
+    vec3(out, a) = y;
+  });
+}
+
+void ImplicitSolver::precondition(const double* in, double* out) {
+  Buffers B = buffers();
+  const int na = static_cast<int>(s_.active.size());
+  if (precond_ldlt_) {
+    // z = S P S r: the filter S zeroes the contacts' v_z in and out. Vertices of the factored
+    // set go through the factor (the others of that set see a zero residual), the rest through
+    // their diagonal block.
+    Factor& f = *factor_;
+    f.rhs.setZero();
+    for (int a = 0; a < na; ++a) {
+      const int fs = f.slot[s_.active[a]];
+      if (fs < 0) continue;
+      for (int i = 0; i < 3; ++i) f.rhs[3 * fs + i] = in[3 * a + i];
+      s_.contacts.filter(s_.active[a], f.rhs.data() + 3 * fs);
+    }
+    f.ldlt.solve(f.rhs.data());
+    for (int a = 0; a < na; ++a) {
+      const int fs = f.slot[s_.active[a]];
+      if (fs >= 0)
+        vec3(out, a) = Eigen::Map<const Eigen::Vector3d>(f.rhs.data() + 3 * fs);
+      else
+        vec3(out, a) = mat3(B.pinv, 2 * a) * Eigen::Map<const Eigen::Vector3d>(in + 3 * a);
+      s_.contacts.filter(s_.active[a], out + 3 * a);
+    }
+    return;
+  }
+  parallel_for(0, na, kRowCost, [&](long a_) {
+    const int a = static_cast<int>(a_);
+    const int v = s_.active[a], pa = s_.slot[v ^ 1];
+    Eigen::Vector3d y = mat3(B.pinv, 2 * a) * Eigen::Map<const Eigen::Vector3d>(in + 3 * a);
+    if (pa >= 0) y += mat3(B.pinv, 2 * a + 1) * Eigen::Map<const Eigen::Vector3d>(in + 3 * pa);
+    s_.contacts.filter(v, y.data());  // the filter of Baraff and Witkin's modified PCG
+    vec3(out, a) = y;
+  });
+}
+
+bool ImplicitSolver::use_ldlt() const {
+  if (s_.p.preconditioner == Preconditioner::Auto) return static_cast<int>(s_.active.size()) <= s_.p.ldlt_max_vertices;
+  return s_.p.preconditioner == Preconditioner::Ldlt;
+}
+
+void ImplicitSolver::factor_pattern() {
+  Factor& f = *factor_;
+  if (f.analysed && f.active == s_.active) return;
+  const int na = static_cast<int>(s_.active.size());
+  f.active = s_.active;
+  f.slot = s_.slot;
+  f.valid = false;
+  f.blk_start.assign(1, 0);
+  f.blk_row.clear();
+  f.blk_spring.clear();
+  for (int a = 0; a < na; ++a) {
+    const int v = s_.active[a];
+    f.sort_buf.clear();
+    for (int q = s_.incidence.start[v]; q < s_.incidence.start[v + 1]; ++q)
+      if (s_.slot[s_.incidence.other[q]] > a) f.sort_buf.emplace_back(s_.slot[s_.incidence.other[q]], s_.incidence.spring[q]);
+    std::sort(f.sort_buf.begin(), f.sort_buf.end());  // rows ascending within each column
+    f.blk_row.push_back(a);
+    f.blk_spring.push_back(-1);
+    for (const auto& [row, spring] : f.sort_buf) {
+      f.blk_row.push_back(row);
+      f.blk_spring.push_back(spring);
+    }
+    f.blk_start.push_back(static_cast<int>(f.blk_row.size()));
+  }
+  f.values.resize(9 * f.blk_row.size());
+  f.rhs.resize(3 * na);
+  f.ldlt.analyze(na, f.blk_start, f.blk_row);
+  f.analysed = true;
+}
+
+void ImplicitSolver::factor_fill(double h) {
+  // A = M (1 + h c) + h W + h^2 J, with each floor contact's v_z row and column replaced by the
+  // identity, as the filtered conjugate gradients see it. Blocks are written column-major.
+  Factor& f = *factor_;
+  Buffers B = buffers();
+  const int na = static_cast<int>(s_.active.size());
+  const double h2 = h * h;
+  const int sym[3][3] = {{0, 3, 4}, {3, 1, 5}, {4, 5, 2}};  // store_sym's layout
+  for (int a = 0; a < na; ++a) {
+    const int va = s_.active[a];
+    for (int b = f.blk_start[a]; b < f.blk_start[a + 1]; ++b) {
+      const int r = f.blk_row[b];
+      const int vr = s_.active[r];
+      double* val = f.values.data() + 9 * b;
+      if (r == a) {
+        const auto D = mat3(B.diag, a);
+        for (int i = 0; i < 3; ++i)
+          for (int ii = 0; ii < 3; ++ii)
+            val[3 * i + ii] = (s_.contacts.filtered(va, i) || s_.contacts.filtered(va, ii)) ? (ii == i ? 1.0 : 0.0) : D(ii, i);
+        continue;
+      }
+      const double* J = B.jac + 6 * f.blk_spring[b];
+      for (int i = 0; i < 3; ++i)
+        for (int ii = 0; ii < 3; ++ii)
+          val[3 * i + ii] = (s_.contacts.filtered(va, i) || s_.contacts.filtered(vr, ii)) ? 0.0 : -h2 * J[sym[ii][i]];
+    }
+  }
+}
+
+void ImplicitSolver::refresh_factor(double h) {
+  // A factor of another active set F still preconditions this one, S: F's part of the residual
+  // goes through A_FF^-1, the vertices outside F through their diagonal blocks (an SPD block
+  // diagonal). It is refactored when it is stale, or when S and F differ by more than a quarter.
+  Factor& f = *factor_;
+  if (f.valid && !f.stale) {
+    int outside = 0;
+    for (int v : s_.active) outside += f.slot[v] < 0;
+    const int ns = static_cast<int>(s_.active.size()), nf = static_cast<int>(f.active.size());
+    if (4 * outside <= ns && nf - (ns - outside) <= ns / 4) return;
+  }
+  factor_pattern();
+  factor_fill(h);
+  // A failure is not expected (A is symmetric positive definite); the solve then falls back to
+  // Jacobi.
+  f.valid = f.ldlt.factorize(f.values.data());
+  ++factorizations_;
+  f.stale = false;
+}
+
+int ImplicitSolver::solve(double h) {
+  Buffers B = buffers();
+  const int na = static_cast<int>(s_.active.size());
+  const bool ldlt = use_ldlt();
+  if (ldlt) refresh_factor(h);
+  precond_ldlt_ = ldlt && factor_->valid;
+  if (!precond_ldlt_) {
+    build_jacobi(h);
+  } else {
+    // Vertices outside the factored set are preconditioned by their diagonal block.
+    for (int a = 0; a < na; ++a)
+      if (factor_->slot[s_.active[a]] < 0) mat3(B.pinv, 2 * a) = mat3(B.diag, a).inverse();
+  }
+  const int N = 3 * na;
+  auto axpy = [&](double alpha, const double* xv, double* y) {  // y += alpha x
+    parallel_for(0, N, kAxpyCost, [&](long i) { y[i] += alpha * xv[i]; });
+  };
+  // Modified PCG (Baraff and Witkin 1998) from the start value in B.dv: constrained DOFs start
+  // at their prescribed value (v_z -> 0) and every search direction is filtered to leave them
+  // there.
+  apply_A(h, B.dv, B.Ap);
+  for (int i = 0; i < N; ++i) B.r[i] = B.b[i] - B.Ap[i];
+  for (int a = 0; a < na; ++a) {
+    s_.contacts.filter(s_.active[a], B.r + 3 * a);
+    s_.contacts.filter(s_.active[a], B.b + 3 * a);
+  }
+  int iterations = 0;
+  const double rnorm0 = std::sqrt(det_dot(B.r, B.r, N, B.partial));
+  const double ref = std::max(rnorm0, std::sqrt(det_dot(B.b, B.b, N, B.partial)));
+  // Absolute floor: a residual below cg_velocity_tolerance times the mass norm changes the
+  // velocities by less than about that (A >= M), whatever rounding-level right-hand side a
+  // resting sheet has; without it such a sheet would iterate on rounding noise.
+  double mass2 = 0.0;
+  for (int v : s_.active) mass2 += 3.0 * s_.mass(v) * s_.mass(v);
+  const double floor_abs = s_.p.cg_velocity_tolerance * std::sqrt(mass2);
+  if (rnorm0 > floor_abs) {
+    precondition(B.r, B.p);
+    double rz = det_dot(B.r, B.p, N, B.partial);
+    while (iterations < s_.p.cg_max_iterations) {
+      ++iterations;
+      apply_A(h, B.p, B.Ap);
+      for (int a = 0; a < na; ++a)
+        s_.contacts.filter(s_.active[a], B.Ap + 3 * a);
+      const double pAp = det_dot(B.p, B.Ap, N, B.partial);
+      if (!(pAp > 0.0)) break;
+      const double alpha = rz / pAp;
+      axpy(alpha, B.p, B.dv);
+      axpy(-alpha, B.Ap, B.r);
+      const double rn = std::sqrt(det_dot(B.r, B.r, N, B.partial));
+      if (rn <= s_.p.cg_tolerance * ref || rn <= floor_abs) break;
+      precondition(B.r, B.z);
+      const double rz_new = det_dot(B.r, B.z, N, B.partial);
+      const double beta = rz_new / rz;
+      rz = rz_new;
+      parallel_for(0, N, kAxpyCost, [&](long i) { B.p[i] = B.z[i] + beta * B.p[i]; });
+    }
+  }
+  if (precond_ldlt_ && iterations > s_.p.refactor_iterations) factor_->stale = true;
+  return iterations;
+}
+
+}  // namespace thinburn
