@@ -96,6 +96,8 @@ void validate(const DynamicsParams& p) {
   nonneg(p.wind_drag, "wind_drag");
   nonneg(p.friction, "friction");
   nonneg(p.sleep_speed, "sleep_speed");
+  require(std::isfinite(p.strain_limit) && p.strain_limit >= 0.0 && p.strain_limit < 1.0,
+          "strain_limit must be in [0, 1) (0: no limit), got " + std::to_string(p.strain_limit));
   require(std::isfinite(p.self_distance) && p.self_distance > 0.0,
           "self_distance must be > 0 lattice thicknesses, got " + std::to_string(p.self_distance));
   require(p.gravity.allFinite(), "gravity must be finite");
@@ -200,6 +202,7 @@ LatticeDynamics::LatticeDynamics(FfdLattice& lattice, const DynamicsParams& p, L
   stick_.assign(n_, 0);
   factor_ = std::make_unique<Factor>();
   self_contact_ = std::make_unique<SelfContact>(topo_, lat_.rest());
+  strain_limit_ = std::make_unique<StrainLimit>(topo_, lat_.rest());
   build_bimetal();
   bend_share_ = target_share();
   if (bend_share_ < 1.0) add_membrane();
@@ -458,6 +461,7 @@ void LatticeDynamics::set_params(const DynamicsParams& p) {
       o.wind_drag != p.wind_drag || o.has_floor != p.has_floor || o.floor_z != p.floor_z ||
       o.friction != p.friction || o.integrator != p.integrator || o.sleeping != p.sleeping ||
       o.sleep_speed != p.sleep_speed || o.bimetal != p.bimetal || o.flexural_rigidity != p.flexural_rigidity ||
+      o.strain_limit != p.strain_limit ||
       (p.bimetal && o.crumple_gain != p.crumple_gain);
   if (o.integrator != p.integrator) forget_history();
   if (p.bimetal && (!o.bimetal || o.crumple_gain != p.crumple_gain || o.anisotropic_curl != p.anisotropic_curl)) bimetal_all_ = true;
@@ -842,6 +846,8 @@ int LatticeDynamics::integrate(double dt, int substeps, StepStats& st) {
         st.cg_iterations += implicit_substep(h);
       else
         explicit_substep(h, p_.integrator == Integrator::Explicit);
+      if (p_.strain_limit > 0.0)
+        st.strain_limited += strain_limit_->apply(p_.strain_limit, lat_.positions(), vel_, mass_, slot_, strength_);
       apply_floor(h);
       apply_colliders(h);
       if (p_.self_collision)

@@ -15,6 +15,7 @@
 #include "lattice.hpp"
 #include "membrane.hpp"
 #include "self_contact.hpp"
+#include "strain_limit.hpp"
 
 namespace thinburn {
 
@@ -64,6 +65,9 @@ struct DynamicsParams {
   double friction = 0.5;       ///< Coulomb coefficient on the floor (>= 0)
   bool self_collision = true;  ///< couples keep self_distance from the sheet's other layers (self_contact.hpp)
   double self_distance = 1.0;  ///< lattice thicknesses between a couple's mid-point and another part of the sheet (> 0)
+  /// Largest |l / L - 1| of the distance between neighbouring couples' centres, kept after each
+  /// substep where the sheet is intact (strain_limit.hpp); 0: no limit, in [0, 1).
+  double strain_limit = 0.0;
   Integrator integrator = Integrator::Implicit;
   double crumple_gain = 1.0;   ///< multiplies the increase of D turned into a crumple (set_material: kCrumpleReferenceK / k_structure)
   double plasticity = 1.0;     ///< in [0, 1]: share of each crumple that the springs' rest lengths keep
@@ -122,6 +126,7 @@ struct StepStats {
   int passes = 0;         ///< integrations of the step (> 1 when it woke sleepers and redid it)
   double max_strain = 0;  ///< largest |l / L - 1| of an awake vertex's springs at the step's end
   int stretch_redos = 0;  ///< integrations redone with more substeps because a spring overstretched
+  int strain_limited = 0; ///< couple pairs the strain limit put back on its bound, all substeps and passes
 };
 
 /// @brief Springs, forces and integration of an FfdLattice's control vertices.
@@ -341,6 +346,7 @@ class LatticeDynamics {
   std::vector<double> rest_save_;
   std::unique_ptr<Factor> factor_;
   std::unique_ptr<SelfContact> self_contact_;  // after each substep, as apply_colliders
+  std::unique_ptr<StrainLimit> strain_limit_;  // after each substep, before the floor
   int factorizations_ = 0;          // of the step in progress
   bool precond_ldlt_ = false;       // the solve in progress uses factor_
 };

@@ -57,6 +57,7 @@ void apply_kwargs(DynamicsParams& p, const py::kwargs& kw) {
                      : k == "floor_z"        ? &p.floor_z
                      : k == "friction"       ? &p.friction
                      : k == "self_distance"  ? &p.self_distance
+                     : k == "strain_limit"   ? &p.strain_limit
                      : k == "crumple_gain"   ? &p.crumple_gain
                      : k == "plasticity"     ? &p.plasticity
                      : k == "sleep_speed"    ? &p.sleep_speed
@@ -106,6 +107,7 @@ py::dict params_dict(const DynamicsParams& p) {
                   "buoyancy"_a = p.buoyancy, "wind_drag"_a = p.wind_drag,
                   "has_floor"_a = p.has_floor, "floor_z"_a = p.floor_z, "friction"_a = p.friction,
                   "self_collision"_a = p.self_collision, "self_distance"_a = p.self_distance,
+                  "strain_limit"_a = p.strain_limit,
                   "integrator"_a = names[int(p.integrator)], "crumple_gain"_a = p.crumple_gain,
                   "plasticity"_a = p.plasticity, "crumple_momentum"_a = p.crumple_momentum,
                   "bimetal"_a = p.bimetal, "anisotropic_curl"_a = p.anisotropic_curl,
@@ -157,6 +159,7 @@ void define_dynamics(py::module_& m) {
       .def_readonly("omega_max", &StepStats::omega_max, "rad/s, bound on the largest frequency.")
       .def_readonly("max_strain", &StepStats::max_strain, "Largest |l/L - 1| of an awake vertex's springs at the end.")
       .def_readonly("stretch_redos", &StepStats::stretch_redos, "Integrations redone with more substeps for an overstretched spring.")
+      .def_readonly("strain_limited", &StepStats::strain_limited, "Couple pairs put back on the strain limit, all substeps and passes.")
       .def_readonly("passes", &StepStats::passes)
       .def("__repr__", [](const StepStats& s) {
         return "StepStats(substeps=" + std::to_string(s.substeps) + ", awake=" +
