@@ -6,6 +6,7 @@ not offered for keyframing, so the UI never suggests an animation the bake would
 """
 import bpy
 import thinburn
+from thinburn.params import FIELDS as PARAM_FIELDS
 from bpy.props import (BoolProperty, CollectionProperty, EnumProperty, FloatProperty, IntProperty,
                        PointerProperty, StringProperty)
 
@@ -34,21 +35,33 @@ MATERIAL_FIELDS = {
 MATERIAL_UNITS = {"flexural_rigidity": 1e-6,  # µN·m in the panel, N·m in the core
                   "strain_limit": 0.01}  # % in the panel, a fraction in the core
 
+
+def _default(group: str, key: str) -> float:
+    """The core's default of a parameter (its table, thinburn.params)."""
+    return float(PARAM_FIELDS[group][key].default)
+
+
+def _high(key: str) -> float:
+    """The core's upper bound of a fire parameter."""
+    return PARAM_FIELDS["simulation"][key].high
+
+
 # Motion parameters read every frame (keyframeable) and passed to Simulation.set_dynamics
-# when they change; defaults equal the core's (a test checks). Gravity comes from the scene.
+# when they change; defaults are the core's (a test checks a paper Simulation's). Gravity comes from the scene.
 DYNAMIC_PARAMS = {
-    "buoyancy": ("Buoyancy", "Lift of hot material: N/kg per unit of heat, along world +Z", 1.0, 0.0, 100.0),
-    "wind_drag": ("Wind Drag", "How hard the wind pushes on the sheet, Pa·s/m (force per area per m/s of relative wind)", 1.0, 0.0, 100.0),
-    "friction": ("Friction", "Coulomb friction of the sheet on the floor", 0.5, 0.0, 10.0),
-    "crumple_gain": ("Crumple Amount", "Multiplies how much the burn's bending turns into crumpling motion (the core's crumple_gain)", 1.0, 0.0, 10.0),
+    "buoyancy": ("Buoyancy", "Lift of hot material: N/kg per unit of heat, along world +Z", _default("dynamics", "buoyancy"), 0.0, 100.0),
+    "wind_drag": ("Wind Drag", "How hard the wind pushes on the sheet, Pa·s/m (force per area per m/s of relative wind)", _default("dynamics", "wind_drag"), 0.0, 100.0),
+    "friction": ("Friction", "Coulomb friction of the sheet on the floor", _default("dynamics", "friction"), 0.0, 10.0),
+    "crumple_gain": ("Crumple Amount", "Multiplies how much the burn's bending turns into crumpling motion (the core's crumple_gain)", _default("dynamics", "crumple_gain"), 0.0, 10.0),
 }
 
-# Model scalars passed as Simulation(**params); defaults equal the core's (a test checks).
+# Model scalars passed as Simulation(**params); defaults and upper bounds are the core's
+# (a test checks a paper Simulation's defaults).
 MODEL_PARAMS = {
-    "v_floor": ("Slowest Spread", "The slowest the fire may spread on a steep fold, as a share of Spread Speed, so folds still burn (the core's v_floor)", 0.05, 0.001, 1.0),
-    "climb": ("Climb", "How much faster flames run uphill along the sheet; 0 is the paper's symmetric spread", 0.0, 0.0, 0.9),
-    "wind_spread": ("Wind Spread", "Extra push on the front per m/s of wind along the sheet", 0.0, 0.0, 100.0),
-    "max_drive": ("Climb and Wind Limit", "Caps how much Climb and Wind Spread speed up the fire one way, so the fire never stalls on the other (the core's max_drive)", 0.9, 0.0, 0.95),
+    "v_floor": ("Slowest Spread", "The slowest the fire may spread on a steep fold, as a share of Spread Speed, so folds still burn (the core's v_floor)", _default("simulation", "v_floor"), 0.001, 1.0),
+    "climb": ("Climb", "How much faster flames run uphill along the sheet; 0 is the paper's symmetric spread", _default("simulation", "climb"), 0.0, _high("climb")),
+    "wind_spread": ("Wind Spread", "Extra push on the front per m/s of wind along the sheet", _default("simulation", "wind_spread"), 0.0, 100.0),
+    "max_drive": ("Climb and Wind Limit", "Caps how much Climb and Wind Spread speed up the fire one way, so the fire never stalls on the other (the core's max_drive)", _default("simulation", "max_drive"), 0.0, _high("max_drive")),
 }
 
 

@@ -5,9 +5,29 @@
 
 namespace thinburn {
 
+const std::vector<param::Field<BendingParams>>& BendingParams::fields() {
+  using P = BendingParams;
+  using namespace param;
+  static const std::vector<Field<P>> table = {
+      field("ct", &P::ct, at_least(0), "eq 2: heat units per (K s / m^2)"),
+      field("cp", &P::cp, at_least(0), "eq 3 (Table 1 Cp): pyrolysis per metre^-1"),
+      field("alpha", &P::alpha, "eq 6: radians per unit heat difference"),
+      field("beta", &P::beta, "eq 6: radians per unit pyrolysis difference"),
+      field("d_min", &P::d_min, above(0), "m: guards d -> 0 in eqs 2 and 3"),
+      field("max_rotation", &P::max_rotation, at_least(0), "rad: |D| saturates smoothly here"),
+      // The keywords name the kernel sums' options after what they sum.
+      field("heat_tolerance", &P::tolerance, within(0, 1, true, true),
+            "relative error bound of the fast kernel sums"),
+      field("heat_fast", &P::fast, "octree sums (false: the direct all-pairs reference)"),
+  };
+  return table;
+}
+
+void validate(const BendingParams& p) { param::check_all(BendingParams::fields(), p); }
+
 Bending::Bending(int couples, const BendingParams& p) : p_(p), couples_(couples) {
   if (couples < 1) throw std::invalid_argument("couples must be >= 1");
-  if (!(p.d_min > 0)) throw std::invalid_argument("d_min must be > 0");
+  validate(p);
   const int n = 2 * couples;
   heat_ = rate_ = pyro_ = step_heat_ = Eigen::VectorXd::Zero(n);
 }

@@ -6,6 +6,8 @@
 
 #include <Eigen/Core>
 
+#include "param_table.hpp"
+
 namespace thinburn {
 
 /// @brief Coefficients of eqs 2-6 (SI units; see docs/bending.md for their scale).
@@ -23,7 +25,13 @@ struct BendingParams {
   double max_rotation = 0.4;
   double tolerance = 0.01; ///< relative error bound of the fast kernel sums
   bool fast = true;        ///< octree sums (false: the direct all-pairs reference)
+
+  /// @brief The table of these fields (param_table.hpp): names, bounds, docs.
+  static const std::vector<param::Field<BendingParams>>& fields();
 };
+
+/// @brief Throw std::invalid_argument naming the first invalid field and its bound.
+void validate(const BendingParams& p);
 
 class Bending {
  public:

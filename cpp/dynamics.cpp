@@ -80,47 +80,66 @@ double explicit_stability_limit(Integrator integ, double w, double c) {
   return lo;
 }
 
-void validate(const DynamicsParams& p) {
-  auto nonneg = [](double x, const char* name) {
-    require(std::isfinite(x) && x >= 0.0,
-            std::string(name) + " must be finite and >= 0, got " + std::to_string(x));
+const std::vector<param::Field<DynamicsParams>>& DynamicsParams::fields() {
+  using P = DynamicsParams;
+  using namespace param;
+  static const std::vector<Field<P>> table = {
+      field("k_structure", &P::k_structure, at_least(0),
+            "Table 1 coefficient of the axis-neighbour springs (per layer)"),
+      field("k_shear", &P::k_shear, at_least(0), "Table 1 coefficient of the diagonal springs (per layer)"),
+      field("k_flex", &P::k_flex, at_least(0), "Table 1 coefficient of the two-apart springs (per layer)"),
+      field("k_thickness", &P::k_thickness, at_least(0), "coefficient of each couple's top-bottom spring"),
+      field("k_transverse", &P::k_transverse, at_least(0),
+            "coefficient of the top-bottom diagonals between adjacent couples"),
+      field("stiffness_unit", &P::stiffness_unit, at_least(0),
+            "N/m per unit coefficient: spring k = coefficient * unit"),
+      field("flexural_rigidity", &P::flexural_rigidity, at_least(0),
+            "N m: the sheet's bending rigidity (0: the lattice's own)"),
+      field("c_damping", &P::c_damping, at_least(0), "1/s: eq 12 per kilogram, F = -c_damping m v"),
+      field("gravity", &P::gravity, "m/s^2"),
+      field("buoyancy", &P::buoyancy, "N/kg per unit heat, along +z"),
+      field("wind_drag", &P::wind_drag, at_least(0), "Pa s/m: F = wind_drag area ((wind - v) . n) n"),
+      field("has_floor", &P::has_floor, "nothing goes below floor_z"),
+      field("floor_z", &P::floor_z, "m: the floor's height"),
+      field("friction", &P::friction, at_least(0), "Coulomb coefficient on the floor"),
+      field("self_collision", &P::self_collision, "couples keep self_distance from the sheet's other layers"),
+      field("self_distance", &P::self_distance, above(0),
+            "lattice thicknesses a couple keeps from other parts of the sheet",
+            "it counts lattice thicknesses"),
+      field("strain_limit", &P::strain_limit, within(0, 1, false, true),
+            "largest |l / L - 1| between neighbouring couples' centres where the sheet is intact (0: none)",
+            "0 turns the limit off"),
+      choice("integrator", &P::integrator, "Integrator", {"explicit", "symplectic", "implicit", "bdf2"},
+             "the lattice's time integrator"),
+      field("crumple_gain", &P::crumple_gain, "multiplies the increase of D turned into a crumple"),
+      field("plasticity", &P::plasticity, within(0, 1), "share of each crumple the springs' rest lengths keep"),
+      field("crumple_momentum", &P::crumple_momentum, "remove the crumple's net translation"),
+      field("bimetal", &P::bimetal, "D shrinks the heated face's springs (false: Fig. 5's chord motion)"),
+      field("anisotropic_curl", &P::anisotropic_curl, "bimetal: the curl bends across the front only"),
+      field("sleep_speed", &P::sleep_speed, at_least(0), "m/s: slower vertices, unforced, may sleep"),
+      field("sleeping", &P::sleeping, "false: every free vertex integrates every step"),
+      field("wake_hold", &P::wake_hold, within(0, kMaxHold), "steps a flickering vertex stays awake"),
+      field("substeps", &P::substeps, within(0, kMaxFixedSubsteps), "substeps per step (0: chosen per step)",
+            "every substep is run, so use 0 and let max_substeps cap them"),
+      field("max_substeps", &P::max_substeps, within(1, kMaxSubstepsCeiling),
+              "most substeps an explicit step may take (more throw)", "beyond that use the implicit integrator"),
+      field("safety", &P::safety, within(0, 1, true), "explicit substep = safety * the stability limit"),
+      field("max_stretch", &P::max_stretch, above(0), "implicit: largest relative change of a spring per substep"),
+      field("cg_tolerance", &P::cg_tolerance, within(0, 1, true, true),
+            "relative residual of the conjugate gradients"),
+      field("cg_velocity_tolerance", &P::cg_velocity_tolerance, at_least(0),
+            "m/s: absolute floor of the CG stopping test"),
+      field("cg_max_iterations", &P::cg_max_iterations, at_least(1), "most conjugate-gradient iterations per solve"),
+      choice("preconditioner", &P::preconditioner, "Preconditioner", {"auto", "ldlt", "jacobi"},
+             "of the implicit solve's conjugate gradients"),
+      field("ldlt_max_vertices", &P::ldlt_max_vertices, at_least(0), "auto: the largest awake set given ldlt"),
+      field("refactor_iterations", &P::refactor_iterations, at_least(0),
+              "ldlt: a solve taking more iterations refactors for the next one"),
   };
-  nonneg(p.k_structure, "k_structure");
-  nonneg(p.k_shear, "k_shear");
-  nonneg(p.k_flex, "k_flex");
-  nonneg(p.k_thickness, "k_thickness");
-  nonneg(p.k_transverse, "k_transverse");
-  nonneg(p.stiffness_unit, "stiffness_unit");
-  nonneg(p.flexural_rigidity, "flexural_rigidity");
-  nonneg(p.c_damping, "c_damping");
-  nonneg(p.wind_drag, "wind_drag");
-  nonneg(p.friction, "friction");
-  nonneg(p.sleep_speed, "sleep_speed");
-  require(std::isfinite(p.strain_limit) && p.strain_limit >= 0.0 && p.strain_limit < 1.0,
-          "strain_limit must be in [0, 1) (0: no limit), got " + std::to_string(p.strain_limit));
-  require(std::isfinite(p.self_distance) && p.self_distance > 0.0,
-          "self_distance must be > 0 lattice thicknesses, got " + std::to_string(p.self_distance));
-  require(p.gravity.allFinite(), "gravity must be finite");
-  require(std::isfinite(p.buoyancy), "buoyancy must be finite");
-  require(std::isfinite(p.floor_z), "floor_z must be finite");
-  require(std::isfinite(p.crumple_gain), "crumple_gain must be finite");
-  require(p.plasticity >= 0.0 && p.plasticity <= 1.0, "plasticity must be in [0, 1]");
-  require(p.substeps >= 0 && p.substeps <= kMaxFixedSubsteps,
-          "substeps must be in [0, " + std::to_string(kMaxFixedSubsteps) + "] (0: chosen per step), got " +
-              std::to_string(p.substeps) + "; every substep is run, so use 0 and let max_substeps cap them");
-  require(p.max_substeps >= 1 && p.max_substeps <= kMaxSubstepsCeiling,
-          "max_substeps must be in [1, " + std::to_string(kMaxSubstepsCeiling) + "], got " +
-              std::to_string(p.max_substeps) + "; beyond that use the implicit integrator");
-  require(p.safety > 0.0 && p.safety <= 1.0, "safety must be in (0, 1]");
-  require(p.max_stretch > 0.0 && std::isfinite(p.max_stretch), "max_stretch must be > 0");
-  require(p.cg_tolerance > 0.0 && p.cg_tolerance < 1.0, "cg_tolerance must be in (0, 1)");
-  require(p.cg_max_iterations >= 1, "cg_max_iterations must be >= 1");
-  nonneg(p.cg_velocity_tolerance, "cg_velocity_tolerance");
-  require(p.ldlt_max_vertices >= 0, "ldlt_max_vertices must be >= 0");
-  require(p.refactor_iterations >= 0, "refactor_iterations must be >= 0");
-  require(p.wake_hold >= 0 && p.wake_hold <= kMaxHold,
-          "wake_hold must be in [0, " + std::to_string(kMaxHold) + "]");
+  return table;
 }
+
+void validate(const DynamicsParams& p) { param::check_all(DynamicsParams::fields(), p); }
 
 void set_material(DynamicsParams& p, double k_structure, double k_shear, double k_flex, double c_damping) {
   // Table 1's names: the caller's material spells them so.

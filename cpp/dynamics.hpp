@@ -14,6 +14,7 @@
 #include "colliders.hpp"
 #include "lattice.hpp"
 #include "membrane.hpp"
+#include "param_table.hpp"
 #include "self_contact.hpp"
 #include "strain_limit.hpp"
 
@@ -95,9 +96,12 @@ struct DynamicsParams {
   Preconditioner preconditioner = Preconditioner::Auto;
   int ldlt_max_vertices = 600;     ///< Auto: the largest awake set given the Ldlt preconditioner
   int refactor_iterations = 8;     ///< Ldlt: a solve taking more iterations refactors for the next one
+
+  /// @brief The table of these fields (param_table.hpp): names, bounds, docs.
+  static const std::vector<param::Field<DynamicsParams>>& fields();
 };
 
-/// @brief Throw std::invalid_argument naming the first invalid field.
+/// @brief Throw std::invalid_argument naming the first invalid field and its bound.
 void validate(const DynamicsParams& p);
 
 /// Table 1's K_structure of paper (DynamicsParams' default k_structure), whose crumple gain is 1.

@@ -99,22 +99,28 @@ void tangents(const Eigen::Vector3d& n, Eigen::Vector3d& t1, Eigen::Vector3d& t2
 
 }  // namespace
 
-void validate(const ParticleParams& p) {
-  require(p.capacity >= 1 && p.capacity <= 100000000, "capacity must be in [1, 1e8]");
-  require(finite_nonneg(p.birth_rate), "birth_rate must be finite and >= 0");
-  require(std::isfinite(p.temperature0) && p.temperature0 > 0.0,
-          "temperature0 must be finite and > 0");
-  require(finite_nonneg(p.cooling), "cooling must be finite and >= 0");
-  require(std::isfinite(p.lifetime) && p.lifetime > 0.0, "lifetime must be finite and > 0");
-  require(std::isfinite(p.lifetime_jitter) && p.lifetime_jitter >= 0.0 && p.lifetime_jitter < 1.0,
-          "lifetime_jitter must be in [0, 1)");
-  require(finite_nonneg(p.buoyancy), "buoyancy must be finite and >= 0");
-  require(finite_nonneg(p.drag), "drag must be finite and >= 0");
-  require(finite_nonneg(p.turbulence), "turbulence must be finite and >= 0");
-  require(finite_nonneg(p.birth_speed), "birth_speed must be finite and >= 0");
-  require(std::isfinite(p.vertical_band) && p.vertical_band >= 0.0 && p.vertical_band <= 1.0,
-          "vertical_band must be in [0, 1]");
+const std::vector<param::Field<ParticleParams>>& ParticleParams::fields() {
+  using P = ParticleParams;
+  using namespace param;
+  static const std::vector<Field<P>> table = {
+      field("capacity", &P::capacity, within(1, 100000000), "particles the pool holds; births beyond are dropped"),
+      field("birth_rate", &P::birth_rate, at_least(0), "particles per second per metre of fire front"),
+      field("temperature0", &P::temperature0, above(0), "K above ambient at birth"),
+      field("cooling", &P::cooling, at_least(0), "1/s: T = temperature0 exp(-cooling age)"),
+      field("lifetime", &P::lifetime, above(0), "s: the mean lifetime"),
+      field("lifetime_jitter", &P::lifetime_jitter, within(0, 1, false, true),
+           "lifetimes uniform in lifetime [1 - j, 1 + j]"),
+      field("buoyancy", &P::buoyancy, at_least(0), "m/s^2 upward at temperature0, proportional to T"),
+      field("drag", &P::drag, at_least(0), "1/s: relaxation rate of the velocity toward the wind"),
+      field("turbulence", &P::turbulence, at_least(0), "m/s: rms of each velocity component's fluctuation"),
+      field("birth_speed", &P::birth_speed, at_least(0), "m/s along the emitting side's normal"),
+      field("vertical_band", &P::vertical_band, within(0, 1), "emitters with |n.z| below this emit on both sides"),
+      field("seed", &P::seed, "seed of the random stream (a Simulation's shell sets it from its own seed)"),
+  };
+  return table;
 }
+
+void validate(const ParticleParams& p) { param::check_all(ParticleParams::fields(), p); }
 
 ParticleSystem::ParticleSystem(const ParticleParams& params) : params_(params) {
   validate(params_);

@@ -10,6 +10,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "param_table.hpp"
+
 namespace thinburn {
 
 using RowMatX3 = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
@@ -28,6 +30,9 @@ struct ParticleParams {
   double birth_speed = 0.05;      ///< m/s along the emitting side's normal
   double vertical_band = 0.1;     ///< emitters with |n.z| < this emit on both sides, alternating
   std::uint64_t seed = 0;         ///< seed of the counter-based random stream
+
+  /// @brief The table of these fields (param_table.hpp): names, bounds, docs.
+  static const std::vector<param::Field<ParticleParams>>& fields();
 };
 
 /// @brief A fixed-capacity pool of fire particles, structure of arrays, deterministic.
@@ -101,7 +106,7 @@ class ParticleSystem {
   std::uint64_t steps_ = 0;
 };
 
-/// @brief Validate parameters; throws std::invalid_argument naming the field.
+/// @brief Validate parameters; throws std::invalid_argument naming the field and its bound.
 void validate(const ParticleParams& params);
 
 }  // namespace thinburn

@@ -35,9 +35,33 @@ double default_thickness(double spacing) { return std::min(0.25 * spacing, kMaxT
 
 }  // namespace
 
+const std::vector<param::Field<ShellParams>>& ShellParams::fields() {
+  using P = ShellParams;
+  using namespace param;
+  static const std::vector<Field<P>> table = {
+      field("lattice", &P::lattice, at_least(0), "M couples per side (0: chosen from the sheet and its cells)"),
+      field("lattice_thickness", &P::lattice_thickness, at_least(0), "m between a couple's two vertices (0: chosen)"),
+      field("has_floor", &P::has_floor, "a horizontal floor under the sheet"),
+      field("floor_z", &P::floor_z, "m: the floor's height"),
+      field("ash_strength", &P::ash_strength, within(0, 1), "share of the springs' stiffness burnt sheet keeps"),
+      field("seed", &P::seed, "seeds the particles' random stream"),
+  };
+  return table;
+}
+
+void validate(const ShellParams& p) {
+  param::check_all(ShellParams::fields(), p);
+  // 1 couple per side has no springs between couples (the table cannot say "0 or >= 2").
+  if (p.lattice == 1) throw std::invalid_argument("lattice must be 0 (chosen) or >= 2, got 1");
+  validate(p.dynamics);
+  validate(p.particles);
+  validate(p.bending);
+}
+
 Shell::Shell(const Sheet& sheet, const ShellParams& params, const std::vector<double>& cell_mass,
              const std::vector<std::uint8_t>& pinned)
     : sheet_(&sheet), params_(params) {
+  validate(params_);
   const int N = sheet.cells();
   M_ = params_.lattice > 0 ? params_.lattice : choose_lattice(N, sheet.size_u(), sheet.size_v());
   if (M_ < 2) throw std::invalid_argument("lattice must be >= 2");
@@ -75,12 +99,12 @@ Shell::Shell(const SurfaceCells& cells, const RowMatX3& vertices, const RowMatX3
              const ShellParams& params, const std::vector<double>& cell_mass,
              const std::vector<std::uint8_t>& pinned)
     : params_(params) {
+  validate(params_);
   // The grid's choice (one couple per 16 cells, none finer than 2 cm, 4..65 per side) with
   // sqrt(area) for the side; an explicit lattice counts couples along sqrt(area).
   const double side = std::sqrt(cells.total_area());
   double spacing = params_.lattice > 0 ? side / (params_.lattice - 1)
                                        : std::clamp(std::max(16.0 * cells.spacing(), 0.02), side / 64.0, side / 3.0);
-  if (params_.lattice == 1) throw std::invalid_argument("lattice must be >= 2");
   thickness_ = params_.lattice_thickness > 0 ? params_.lattice_thickness : default_thickness(spacing);
   // A chosen lattice that leaves a piece without a triangulated control surface (a small piece,
   // a mesh of two triangles) gets finer until it has one; an explicit one is refused by name.

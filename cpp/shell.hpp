@@ -35,7 +35,13 @@ struct ShellParams {
   DynamicsParams dynamics;
   ParticleParams particles;
   BendingParams bending;
+
+  /// @brief The table of the scalars (the groups have their own) (param_table.hpp): names, bounds, docs.
+  static const std::vector<param::Field<ShellParams>>& fields();
 };
+
+/// @brief Throw std::invalid_argument naming the first invalid field (its groups' too).
+void validate(const ShellParams& p);
 
 /// @brief The fire's sources for one step of the shell.
 struct ShellSources {

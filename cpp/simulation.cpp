@@ -44,19 +44,66 @@ std::unique_ptr<FireCells> make_cells(const RowMatX3& V, const RowMatX3i& F, con
   if (p.front == FrontMethod::Cellular8 || p.front == FrontMethod::Cellular16)
     throw std::invalid_argument("front: the cellular rules are defined on a flat grid; use geometry='plane' (a flat "
                                 "sheet) or the default front on a curved shell");
-  if (p.cells < 2) throw std::invalid_argument("cells must be >= 2");
   return std::make_unique<ShellCells>(V, F, p.cells);
+}
+
+// The parameters, checked before the cells are built from them.
+const SimulationParams& validated(const SimulationParams& p) {
+  validate(p);
+  return p;
 }
 
 }  // namespace
 
+const std::vector<param::Field<SimulationParams>>& SimulationParams::fields() {
+  using P = SimulationParams;
+  using namespace param;
+  static const std::vector<Field<P>> table = {
+      field("cells", &P::cells, within(2, 4096), "N: N x N grid cells, or about N^2 on a surface"),
+      choice("geometry", &P::geometry, "Geometry", {"auto", "plane", "surface"},
+             "where the cells and the lattice live (auto: plane for a flat mesh)"),
+      choice("front", &P::front, "FrontMethod", {"cellular", "cellular16", "fmm1", "fmm"}, "the grid's fire front"),
+      field("seed", &P::seed, "seeds every random draw"),
+      field("v0", &P::v0, above(0), "m/s: eq 1's spread speed V0"),
+      field("cv", &P::cv, at_least(0), "eq 1 spread coefficient: V = V0 (1 - Cv grad^2)"),
+      field("v_floor", &P::v_floor, within(0, 1, true), "share of V0 below which V never falls"),
+      field("speed_noise", &P::speed_noise, within(0, 0.9), "relative per-cell jitter of V0 (seeded)"),
+      field("burn_duration", &P::burn_duration, above(0), "s a cell burns before it is burnt"),
+      field("finish_within", &P::finish_within, at_least(0),
+            "s from the first ignition to the last burnout (0: off)"),
+      field("ignition_temperature", &P::ignition_temperature, at_least(0),
+           "K above ambient at which heat lights an unburnt cell (0: heat does not ignite)"),
+      field("ignition_gain", &P::ignition_gain, at_least(0), "m^2/s: eq 2's Ct for the cells' temperature"),
+      field("heat_loss", &P::heat_loss, at_least(0), "1/s: the cells' cooling (Newton's law)"),
+      field("duration_noise", &P::duration_noise, within(0, 0.9), "relative per-cell jitter of the burn duration"),
+      field("climb", &P::climb, within(0, 0.9), "drive toward world-up along the sheet per unit slope"),
+      field("wind_spread", &P::wind_spread, at_least(0), "drive per m/s of wind along the sheet"),
+      field("max_drive", &P::max_drive, within(0, 0.95), "cap on the drive, so the back fire never stalls"),
+      field("areal_density", &P::areal_density, above(0), "kg/m^2"),
+      field("ash_fraction", &P::ash_fraction, within(0, 1), "share of its mass a burnt cell keeps"),
+      field("ash_strength", &P::ash_strength, within(0, 1),
+            "share of the lattice springs' stiffness burnt sheet keeps"),
+      field("shell", &P::shell, "the shell: lattice, particles, bending and motion (off: the rest shape)"),
+      field("lattice", &P::lattice, within(0, kMaxLattice), "M couples per side (0: chosen)",
+            "a step's cost grows as M^2"),
+      field("lattice_thickness", &P::lattice_thickness, at_least(0), "m between a couple's two vertices (0: chosen)"),
+      field("has_floor", &P::has_floor, "a horizontal floor (a table) under the sheet"),
+      field("floor_z", &P::floor_z, "m: the floor's height"),
+  };
+  return table;
+}
+
+void validate(const SimulationParams& p) {
+  param::check_all(SimulationParams::fields(), p);
+  validate(p.dynamics);
+  validate(p.particles);
+  validate(p.bending);
+}
+
 Simulation::Simulation(const RowMatX3& vertices, const RowMatX3i& faces, const RowMatX2& uv,
                        const SimulationParams& params, const std::vector<std::uint8_t>& pinned,
                        const CellMaps& maps)
-    : params_(params), vertices_(vertices), faces_(faces), cells_(make_cells(vertices, faces, uv, params)) {
-  if (!(params.v0 > 0)) throw std::invalid_argument("v0 must be > 0");
-  if (!(params.burn_duration > 0)) throw std::invalid_argument("burn_duration must be > 0");
-  if (!(params.ash_strength >= 0 && params.ash_strength <= 1)) throw std::invalid_argument("ash_strength must be in [0, 1]");
+    : params_(validated(params)), vertices_(vertices), faces_(faces), cells_(make_cells(vertices, faces, uv, params)) {
   show_floor_in_dynamics();
   bind_cells();
   const int nc = cells_->size();
@@ -86,7 +133,6 @@ Simulation::Simulation(const RowMatX3& vertices, const RowMatX3i& faces, const R
     find_pieces();
   }
   if (params.finish_within > 0) {
-    if (!std::isfinite(params.finish_within)) throw std::invalid_argument("finish_within must be finite");
     plan_cells_ = cells_->clone();
     // Each cell burns at most half the time: the rest is for the fire to travel.
     double longest = 0.0;

@@ -31,6 +31,10 @@ enum class Geometry {
   Surface  ///< cells on the surface itself and a lattice on a control surface fitted to it
 };
 
+/// The largest lattice, M couples per side: a step costs about M^2 (python/thinburn/simulation.py,
+/// MAX_LATTICE, has the measurements).
+constexpr int kMaxLattice = 129;
+
 /// @brief Every scalar the simulation needs; the Python layer fills it from a material preset.
 struct SimulationParams {
   int cells = 128;
@@ -68,7 +72,13 @@ struct SimulationParams {
   DynamicsParams dynamics;
   ParticleParams particles;
   BendingParams bending;
+
+  /// @brief The table of the scalars (the groups have their own) (param_table.hpp): names, bounds, docs.
+  static const std::vector<param::Field<SimulationParams>>& fields();
 };
+
+/// @brief Throw std::invalid_argument naming the first invalid field (its groups' too).
+void validate(const SimulationParams& p);
 
 /// @brief Painted maps, one value >= 0 per input vertex; an empty map is 1 everywhere (and
 /// costs nothing: the simulation is bit-identical to one without it). Read at the cells by

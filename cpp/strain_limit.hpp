@@ -48,7 +48,7 @@ class StrainLimit {
 
   /// Strength (1 intact) below which a pair is not limited: a vertex whose cells have begun to
   /// char (strength falls towards the ash's as char rises, docs/dynamics.md).
-  static constexpr double kIntact = 0.95;
+  static constexpr double kIntact = 0.5;
   /// Most sweeps per call. A call stops at the first sweep that finds nothing beyond the limit;
   /// a substep moves the sheet little, so most stop after one.
   static constexpr int kSweeps = 64;

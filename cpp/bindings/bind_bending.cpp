@@ -1,5 +1,4 @@
-// Thin binding of Bending (eqs 2-6): heat, pyrolysis and the rotation D per couple, and the
-// keyword parser of its parameters, shared with the Simulation's.
+// Thin binding of Bending (eqs 2-6): heat, pyrolysis and the rotation D per couple.
 #include <pybind11/eigen.h>
 #include <pybind11/pybind11.h>
 
@@ -9,37 +8,11 @@
 
 #include "bending.hpp"
 #include "bindings.hpp"
-#include "convert.hpp"
+#include "kwargs.hpp"
 
 namespace py = pybind11;
 
 namespace thinburn::bind {
-
-void apply_bending_kwargs(BendingParams& b, const py::dict& kw) {
-  for (const auto& item : kw) {
-    const std::string k = key_name(item.first);
-    double* d = k == "ct" ? &b.ct : k == "cp" ? &b.cp : k == "alpha" ? &b.alpha : k == "beta" ? &b.beta
-              : k == "d_min" ? &b.d_min : k == "heat_tolerance" ? &b.tolerance
-              : k == "max_rotation" ? &b.max_rotation : nullptr;
-    if (d)
-      *d = to_double(k, item.second);
-    else if (k == "heat_fast")
-      b.fast = to_bool(k, item.second);
-    else
-      throw py::type_error("unexpected bending parameter '" + k + "'");
-  }
-  if (!(b.d_min > 0)) throw std::invalid_argument("d_min must be > 0");
-  if (!(b.tolerance > 0 && b.tolerance < 1)) throw std::invalid_argument("heat_tolerance must be in (0, 1)");
-  if (!(b.ct >= 0) || !(b.cp >= 0)) throw std::invalid_argument("ct and cp must be >= 0");
-  if (!(b.max_rotation >= 0) || !std::isfinite(b.max_rotation)) throw std::invalid_argument("max_rotation must be >= 0");
-  if (!std::isfinite(b.alpha) || !std::isfinite(b.beta)) throw std::invalid_argument("alpha and beta must be finite");
-}
-
-py::dict bending_params_dict(const BendingParams& b) {
-  return py::dict(py::arg("ct") = b.ct, py::arg("cp") = b.cp, py::arg("alpha") = b.alpha,
-                  py::arg("beta") = b.beta, py::arg("d_min") = b.d_min, py::arg("max_rotation") = b.max_rotation,
-                  py::arg("heat_tolerance") = b.tolerance, py::arg("heat_fast") = b.fast);
-}
 
 namespace {
 void require_rows(const RowMatX3& m, Eigen::Index rows, const char* name) {
@@ -58,7 +31,7 @@ void define_bending(py::module_& m) {
       .def(py::init([](int couples, const py::kwargs& kw) {
              if (couples < 1) throw py::value_error("couples must be >= 1, got " + std::to_string(couples));
              BendingParams p;
-             apply_bending_kwargs(p, kw);
+             apply_kwargs(p, kw, "bending");
              return new Bending(couples, p);
            }),
            py::arg("couples"))
@@ -98,7 +71,7 @@ void define_bending(py::module_& m) {
       .def_property_readonly("heat", &Bending::heat, "Heat accumulated per control vertex (eq 2).")
       .def_property_readonly("heat_rate", &Bending::heat_rate, "The last step's heat / dt per control vertex.")
       .def_property_readonly("pyrolysis", &Bending::pyrolysis, "Pyrolysis per control vertex now (eq 3).")
-      .def_property_readonly("params", [](const Bending& b) { return bending_params_dict(b.params()); });
+      .def_property_readonly("params", [](const Bending& b) { return params_dict(b.params()); });
 }
 
 }  // namespace thinburn::bind

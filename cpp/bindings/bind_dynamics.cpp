@@ -7,6 +7,7 @@
 
 #include "bindings.hpp"
 #include "convert.hpp"
+#include "kwargs.hpp"
 #include "block_ldlt.hpp"
 #include "crumple.hpp"
 #include "dynamics.hpp"
@@ -17,109 +18,11 @@ using namespace pybind11::literals;
 namespace thinburn::bind {
 namespace {
 
+// explicit_stability_limit's integrator, taken as the integrator keyword is.
 Integrator parse_integrator(const py::handle& h) {
-  if (py::isinstance<Integrator>(h)) return h.cast<Integrator>();
-  if (!py::isinstance<py::str>(h)) throw py::type_error("integrator must be a str or Integrator");
-  const std::string s = h.cast<std::string>();
-  if (s == "explicit") return Integrator::Explicit;
-  if (s == "symplectic") return Integrator::Symplectic;
-  if (s == "implicit") return Integrator::Implicit;
-  if (s == "bdf2") return Integrator::Bdf2;
-  throw std::invalid_argument("integrator must be 'implicit', 'bdf2', 'symplectic' or 'explicit', got '" +
-                              s + "'");
-}
-
-Preconditioner parse_preconditioner(const py::handle& h) {
-  if (py::isinstance<Preconditioner>(h)) return h.cast<Preconditioner>();
-  if (!py::isinstance<py::str>(h)) throw py::type_error("preconditioner must be a str or Preconditioner");
-  const std::string s = h.cast<std::string>();
-  if (s == "auto") return Preconditioner::Auto;
-  if (s == "ldlt") return Preconditioner::Ldlt;
-  if (s == "jacobi") return Preconditioner::Jacobi;
-  throw std::invalid_argument("preconditioner must be 'auto', 'ldlt' or 'jacobi', got '" + s + "'");
-}
-
-// Apply keyword arguments to p; unknown names raise TypeError naming them.
-void apply_kwargs(DynamicsParams& p, const py::kwargs& kw) {
-  for (const auto& item : kw) {
-    const std::string k = key_name(item.first);
-    const py::handle v = item.second;
-    double* dfield = k == "k_structure"      ? &p.k_structure
-                     : k == "k_shear"        ? &p.k_shear
-                     : k == "k_flex"         ? &p.k_flex
-                     : k == "k_thickness"    ? &p.k_thickness
-                     : k == "k_transverse"   ? &p.k_transverse
-                     : k == "stiffness_unit" ? &p.stiffness_unit
-                     : k == "flexural_rigidity" ? &p.flexural_rigidity
-                     : k == "c_damping"      ? &p.c_damping
-                     : k == "buoyancy"       ? &p.buoyancy
-                     : k == "wind_drag"      ? &p.wind_drag
-                     : k == "floor_z"        ? &p.floor_z
-                     : k == "friction"       ? &p.friction
-                     : k == "self_distance"  ? &p.self_distance
-                     : k == "strain_limit"   ? &p.strain_limit
-                     : k == "crumple_gain"   ? &p.crumple_gain
-                     : k == "plasticity"     ? &p.plasticity
-                     : k == "sleep_speed"    ? &p.sleep_speed
-                     : k == "safety"         ? &p.safety
-                     : k == "max_stretch"    ? &p.max_stretch
-                     : k == "cg_tolerance"   ? &p.cg_tolerance
-                     : k == "cg_velocity_tolerance" ? &p.cg_velocity_tolerance
-                                             : nullptr;
-    bool* bfield = k == "has_floor" ? &p.has_floor : k == "sleeping" ? &p.sleeping
-                   : k == "crumple_momentum" ? &p.crumple_momentum
-                   : k == "bimetal" ? &p.bimetal
-                   : k == "self_collision" ? &p.self_collision
-                   : k == "anisotropic_curl" ? &p.anisotropic_curl : nullptr;
-    int* ifield = k == "substeps"            ? &p.substeps
-                  : k == "max_substeps"      ? &p.max_substeps
-                  : k == "cg_max_iterations" ? &p.cg_max_iterations
-                  : k == "ldlt_max_vertices" ? &p.ldlt_max_vertices
-                  : k == "refactor_iterations" ? &p.refactor_iterations
-                  : k == "wake_hold" ? &p.wake_hold
-                                             : nullptr;
-    if (dfield)
-      *dfield = to_double(k, v);
-    else if (bfield)
-      *bfield = to_bool(k, v);
-    else if (ifield)
-      *ifield = to_int(k, v);
-    else if (k == "integrator")
-      p.integrator = parse_integrator(v);
-    else if (k == "preconditioner")
-      p.preconditioner = parse_preconditioner(v);
-    else if (k == "gravity")
-      p.gravity = to_vector3(k, v);
-    else
-      throw py::type_error("unexpected keyword argument '" + k + "'");
-  }
-  validate(p);
-}
-
-py::dict params_dict(const DynamicsParams& p) {
-  const char* names[] = {"explicit", "symplectic", "implicit", "bdf2"};
-  const char* preconditioners[] = {"auto", "ldlt", "jacobi"};
-  return py::dict("k_structure"_a = p.k_structure, "k_shear"_a = p.k_shear, "k_flex"_a = p.k_flex,
-                  "k_thickness"_a = p.k_thickness, "k_transverse"_a = p.k_transverse,
-                  "stiffness_unit"_a = p.stiffness_unit, "flexural_rigidity"_a = p.flexural_rigidity,
-                  "c_damping"_a = p.c_damping,
-                  "gravity"_a = py::make_tuple(p.gravity.x(), p.gravity.y(), p.gravity.z()),
-                  "buoyancy"_a = p.buoyancy, "wind_drag"_a = p.wind_drag,
-                  "has_floor"_a = p.has_floor, "floor_z"_a = p.floor_z, "friction"_a = p.friction,
-                  "self_collision"_a = p.self_collision, "self_distance"_a = p.self_distance,
-                  "strain_limit"_a = p.strain_limit,
-                  "integrator"_a = names[int(p.integrator)], "crumple_gain"_a = p.crumple_gain,
-                  "plasticity"_a = p.plasticity, "crumple_momentum"_a = p.crumple_momentum,
-                  "bimetal"_a = p.bimetal, "anisotropic_curl"_a = p.anisotropic_curl,
-                  "sleep_speed"_a = p.sleep_speed,
-                  "sleeping"_a = p.sleeping, "substeps"_a = p.substeps,
-                  "max_substeps"_a = p.max_substeps, "safety"_a = p.safety,
-                  "max_stretch"_a = p.max_stretch, "cg_tolerance"_a = p.cg_tolerance,
-                  "cg_velocity_tolerance"_a = p.cg_velocity_tolerance,
-                  "cg_max_iterations"_a = p.cg_max_iterations,
-                  "preconditioner"_a = preconditioners[int(p.preconditioner)],
-                  "ldlt_max_vertices"_a = p.ldlt_max_vertices,
-                  "refactor_iterations"_a = p.refactor_iterations, "wake_hold"_a = p.wake_hold);
+  DynamicsParams p;
+  set_field(*param::find_field(DynamicsParams::fields(), "integrator"), p, h);
+  return p.integrator;
 }
 
 std::vector<std::uint8_t> as_flags(const py::array_t<std::uint8_t, py::array::forcecast>& a) {
@@ -133,12 +36,6 @@ Eigen::Vector3d as_vec3(const std::vector<double>& w, const char* name) {
 }
 
 }  // namespace
-
-void apply_dynamics_kwargs(DynamicsParams& p, const py::dict& kw) {
-  apply_kwargs(p, py::reinterpret_borrow<py::kwargs>(kw));
-}
-
-py::dict dynamics_params_dict(const DynamicsParams& p) { return params_dict(p); }
 
 void define_dynamics(py::module_& m) {
   py::enum_<Preconditioner>(m, "Preconditioner", "Preconditioner of the implicit integrator's conjugate gradients.")
@@ -174,7 +71,7 @@ void define_dynamics(py::module_& m) {
                               "DynamicsParams fields (see docs/dynamics.md).")
       .def(py::init([](FfdLattice& lattice, const py::kwargs& kw) {
              DynamicsParams p;
-             apply_kwargs(p, kw);
+             apply_kwargs(p, kw, "dynamics");
              return new LatticeDynamics(lattice, p);
            }),
            "lattice"_a, py::keep_alive<1, 2>())
@@ -182,7 +79,7 @@ void define_dynamics(py::module_& m) {
           "set_params",
           [](LatticeDynamics& self, const py::kwargs& kw) {
             DynamicsParams p = self.params();
-            apply_kwargs(p, kw);
+            apply_kwargs(p, kw, "dynamics");
             self.set_params(p);
           },
           "Change the named parameters; the others keep their values.")

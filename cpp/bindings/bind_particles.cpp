@@ -2,93 +2,24 @@
 #include <pybind11/stl.h>
 
 #include "bindings.hpp"
-#include "convert.hpp"
+#include "kwargs.hpp"
 #include "particles.hpp"
 
 namespace py = pybind11;
 
 namespace thinburn::bind {
-namespace {
-
-ParticleSystem make_system(int capacity, double birth_rate, double temperature0, double cooling,
-                           double lifetime, double lifetime_jitter, double buoyancy, double drag,
-                           double turbulence, double birth_speed, double vertical_band,
-                           std::uint64_t seed) {
-  ParticleParams p;
-  p.capacity = capacity;
-  p.birth_rate = birth_rate;
-  p.temperature0 = temperature0;
-  p.cooling = cooling;
-  p.lifetime = lifetime;
-  p.lifetime_jitter = lifetime_jitter;
-  p.buoyancy = buoyancy;
-  p.drag = drag;
-  p.turbulence = turbulence;
-  p.birth_speed = birth_speed;
-  p.vertical_band = vertical_band;
-  p.seed = seed;
-  return ParticleSystem(p);
-}
-
-py::dict params_dict(const ParticleParams& p) {
-  py::dict d;
-  d["capacity"] = p.capacity;
-  d["birth_rate"] = p.birth_rate;
-  d["temperature0"] = p.temperature0;
-  d["cooling"] = p.cooling;
-  d["lifetime"] = p.lifetime;
-  d["lifetime_jitter"] = p.lifetime_jitter;
-  d["buoyancy"] = p.buoyancy;
-  d["drag"] = p.drag;
-  d["turbulence"] = p.turbulence;
-  d["birth_speed"] = p.birth_speed;
-  d["vertical_band"] = p.vertical_band;
-  d["seed"] = p.seed;
-  return d;
-}
-
-}  // namespace
-
-void apply_particle_kwargs(ParticleParams& p, const py::dict& kw) {
-  for (const auto& item : kw) {
-    const std::string k = key_name(item.first);
-    double* d = k == "birth_rate"        ? &p.birth_rate
-                : k == "temperature0"    ? &p.temperature0
-                : k == "cooling"         ? &p.cooling
-                : k == "lifetime"        ? &p.lifetime
-                : k == "lifetime_jitter" ? &p.lifetime_jitter
-                : k == "buoyancy"        ? &p.buoyancy
-                : k == "drag"            ? &p.drag
-                : k == "turbulence"      ? &p.turbulence
-                : k == "birth_speed"     ? &p.birth_speed
-                : k == "vertical_band"   ? &p.vertical_band
-                                         : nullptr;
-    if (d)
-      *d = to_double(k, item.second);
-    else if (k == "capacity")
-      p.capacity = to_int(k, item.second, 1, 100000000);
-    else
-      throw py::type_error("unexpected particle parameter '" + k + "'");
-  }
-  validate(p);
-}
-
-py::dict particle_params_dict(const ParticleParams& p) { return params_dict(p); }
-
 void define_particles(py::module_& m) {
-  const ParticleParams def;
   py::class_<ParticleSystem>(m, "ParticleSystem",
                              "A fixed-capacity pool of fire particles, structure of arrays, "
                              "deterministic. A birth that finds the pool full is dropped and "
                              "counted in `dropped`.")
-      .def(py::init(&make_system), py::arg("capacity") = def.capacity,
-           py::arg("birth_rate") = def.birth_rate, py::arg("temperature0") = def.temperature0,
-           py::arg("cooling") = def.cooling, py::arg("lifetime") = def.lifetime,
-           py::arg("lifetime_jitter") = def.lifetime_jitter, py::arg("buoyancy") = def.buoyancy,
-           py::arg("drag") = def.drag, py::arg("turbulence") = def.turbulence,
-           py::arg("birth_speed") = def.birth_speed, py::arg("vertical_band") = def.vertical_band,
-           py::arg("seed") = def.seed,
-           "Create an empty pool; raises ValueError naming a bad parameter.")
+      .def(py::init([](const py::kwargs& kw) {
+             ParticleParams p;
+             apply_kwargs(p, kw, "particle");
+             return new ParticleSystem(p);
+           }),
+           "Create an empty pool; keyword arguments are the ParticleParams fields (param_fields('particles'));\n"
+           "raises ValueError naming a bad parameter.")
       .def(
           "emit",
           [](ParticleSystem& s, const RowMatX3& pos, const RowMatX3& normal,

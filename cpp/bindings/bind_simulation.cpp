@@ -1,4 +1,5 @@
-// Thin binding of the Simulation; validation lives in python/thinburn/simulation.py.
+// Thin binding of the Simulation; python/thinburn/simulation.py checks the arrays and arguments,
+// the core the parameters (by their tables, param_table.hpp).
 #include <pybind11/eigen.h>
 #include <pybind11/numpy.h>
 #include <pybind11/stl.h>
@@ -9,6 +10,7 @@
 
 #include "bindings.hpp"
 #include "convert.hpp"
+#include "kwargs.hpp"
 #include "simulation.hpp"
 #include "threads.hpp"
 
@@ -16,24 +18,6 @@ namespace py = pybind11;
 
 namespace thinburn::bind {
 namespace {
-
-FrontMethod front_from_name(const std::string& name) {
-  if (name == "cellular") return FrontMethod::Cellular8;
-  if (name == "cellular16") return FrontMethod::Cellular16;
-  if (name == "fmm1") return FrontMethod::Fmm1;
-  if (name == "fmm") return FrontMethod::Fmm2;
-  throw std::invalid_argument("front: unknown method '" + name + "'");
-}
-
-std::string front_name(FrontMethod m) {
-  switch (m) {
-    case FrontMethod::Cellular8: return "cellular";
-    case FrontMethod::Cellular16: return "cellular16";
-    case FrontMethod::Fmm1: return "fmm1";
-    case FrontMethod::Fmm2: return "fmm";
-  }
-  return "fmm";
-}
 
 int checked_cell(const Simulation& s, int cell) {
   if (cell < 0 || cell >= s.num_cells())
@@ -52,53 +36,21 @@ py::array_t<T> per_cell(const Simulation& s, const std::vector<T>& v) {
   return a;
 }
 
-Geometry geometry_from_name(const std::string& name) {
-  if (name == "auto") return Geometry::Auto;
-  if (name == "plane") return Geometry::Plane;
-  if (name == "surface") return Geometry::Surface;
-  throw std::invalid_argument("geometry: unknown value '" + name + "' (auto, plane or surface)");
-}
-
+// The name of the geometry a Simulation chose, as the geometry keyword spells it.
 std::string geometry_name(Geometry g) {
-  switch (g) {
-    case Geometry::Auto: return "auto";
-    case Geometry::Plane: return "plane";
-    case Geometry::Surface: return "surface";
-  }
-  return "auto";
+  return param::find_field(SimulationParams::fields(), "geometry")->choices.at(static_cast<int>(g));
 }
 
 void define_params(py::module_& m) {
   py::class_<SimulationParams> p(m, "SimulationParams", "Every scalar of a simulation (SI units).");
-  p.def(py::init<>())
-      .def_readwrite("cells", &SimulationParams::cells)
-      .def_property("geometry", [](const SimulationParams& s) { return geometry_name(s.geometry); },
-                    [](SimulationParams& s, const std::string& n) { s.geometry = geometry_from_name(n); })
-      .def_property("front", [](const SimulationParams& s) { return front_name(s.front); },
-                    [](SimulationParams& s, const std::string& n) { s.front = front_from_name(n); })
-      .def_readwrite("seed", &SimulationParams::seed)
-      .def_readwrite("v0", &SimulationParams::v0)
-      .def_readwrite("cv", &SimulationParams::cv)
-      .def_readwrite("v_floor", &SimulationParams::v_floor)
-      .def_readwrite("speed_noise", &SimulationParams::speed_noise)
-      .def_readwrite("burn_duration", &SimulationParams::burn_duration)
-      .def_readwrite("duration_noise", &SimulationParams::duration_noise)
-      .def_readwrite("finish_within", &SimulationParams::finish_within)
-      .def_readwrite("ignition_temperature", &SimulationParams::ignition_temperature)
-      .def_readwrite("ignition_gain", &SimulationParams::ignition_gain)
-      .def_readwrite("heat_loss", &SimulationParams::heat_loss)
-      .def_readwrite("climb", &SimulationParams::climb)
-      .def_readwrite("wind_spread", &SimulationParams::wind_spread)
-      .def_readwrite("max_drive", &SimulationParams::max_drive)
-      .def_readwrite("areal_density", &SimulationParams::areal_density)
-      .def_readwrite("ash_fraction", &SimulationParams::ash_fraction)
-      .def_readwrite("ash_strength", &SimulationParams::ash_strength)
-      .def_readwrite("shell", &SimulationParams::shell)
-      .def_readwrite("lattice", &SimulationParams::lattice)
-      .def_readwrite("lattice_thickness", &SimulationParams::lattice_thickness)
-      .def_readwrite("has_floor", &SimulationParams::has_floor)
-      .def_readwrite("floor_z", &SimulationParams::floor_z)
-      .def("set_dynamics", [](SimulationParams& s, const py::dict& kw) { apply_dynamics_kwargs(s.dynamics, kw); })
+  p.def(py::init<>());
+  // Its scalars, one property per field of its table (converted and named as keywords are;
+  // the Simulation validates them all when it is built).
+  for (const auto& f : SimulationParams::fields())
+    p.def_property(
+        f.name, [&f](const SimulationParams& s) { return get_field(f, s); },
+        [&f](SimulationParams& s, const py::handle& v) { set_field(f, s, v); }, f.doc);
+  p.def("set_dynamics", [](SimulationParams& s, const py::dict& kw) { apply_kwargs(s.dynamics, kw, "dynamics"); })
       .def("set_material",
            [](SimulationParams& s, const py::handle& k_structure, const py::handle& k_shear,
               const py::handle& k_flex, const py::handle& c_damping) {
@@ -108,11 +60,13 @@ void define_params(py::module_& m) {
            py::arg("k_structure"), py::arg("k_shear"), py::arg("k_flex"), py::arg("c_damping"),
            "A Table 1 material's springs and damping, with the transverse springs and the crumple "
            "gain that follow from them (thinburn::set_material).")
-      .def("set_particles", [](SimulationParams& s, const py::dict& kw) { apply_particle_kwargs(s.particles, kw); })
-      .def("set_bending", [](SimulationParams& s, const py::dict& kw) { apply_bending_kwargs(s.bending, kw); })
-      .def_property_readonly("dynamics", [](const SimulationParams& s) { return dynamics_params_dict(s.dynamics); })
-      .def_property_readonly("particles", [](const SimulationParams& s) { return particle_params_dict(s.particles); })
-      .def_property_readonly("bending", [](const SimulationParams& s) { return bending_params_dict(s.bending); });
+      .def("validate", [](const SimulationParams& s) { validate(s); },
+           "Raise ValueError naming the first invalid field (the groups' too), as building a Simulation does.")
+      .def("set_particles", [](SimulationParams& s, const py::dict& kw) { apply_kwargs(s.particles, kw, "particle"); })
+      .def("set_bending", [](SimulationParams& s, const py::dict& kw) { apply_kwargs(s.bending, kw, "bending"); })
+      .def_property_readonly("dynamics", [](const SimulationParams& s) { return params_dict(s.dynamics); })
+      .def_property_readonly("particles", [](const SimulationParams& s) { return params_dict(s.particles); })
+      .def_property_readonly("bending", [](const SimulationParams& s) { return params_dict(s.bending); });
 }
 
 }  // namespace
@@ -261,7 +215,7 @@ void define_simulation(py::module_& m) {
       .def_property_readonly("particles_dropped", [](const S& s) { return s.particles() ? s.particles()->dropped() : 0; })
       .def("set_dynamics", [](S& s, const py::dict& kw) {
         DynamicsParams p = s.params().dynamics;
-        apply_dynamics_kwargs(p, kw);
+        apply_kwargs(p, kw, "dynamics");
         s.set_dynamics_params(p);
       })
       .def("phase_seconds", [](const S& s) {

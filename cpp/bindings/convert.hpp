@@ -8,6 +8,7 @@
 #include <Eigen/Core>
 #include <climits>
 #include <cmath>
+#include <cstdint>
 #include <string>
 
 namespace thinburn::bind {
@@ -31,6 +32,17 @@ inline bool is_text(const pybind11::handle& h) {
 // An object that is an integer in Python's sense (int, numpy integers: has __index__).
 inline bool is_integral(const pybind11::handle& h) {
   return !is_bool_like(h) && !is_text(h) && PyIndex_Check(h.ptr());
+}
+
+// An integer object in Python's sense as a Python int; a TypeError naming key for any other.
+inline pybind11::object as_index(const std::string& key, const pybind11::handle& h) {
+  if (!is_integral(h)) throw pybind11::type_error(key + " must be an int, got " + type_name(h));
+  pybind11::object i = pybind11::reinterpret_steal<pybind11::object>(PyNumber_Index(h.ptr()));
+  if (!i) {
+    PyErr_Clear();
+    throw pybind11::type_error(key + " must be an int, got " + type_name(h));
+  }
+  return i;
 }
 }  // namespace detail
 
@@ -60,13 +72,7 @@ inline double to_double(const std::string& key, const pybind11::handle& h) {
 // 2.0), bools and text are refused with a TypeError, out-of-range values with a ValueError.
 inline int to_int(const std::string& key, const pybind11::handle& h, long long lo = INT_MIN,
                   long long hi = INT_MAX) {
-  if (!detail::is_integral(h))
-    throw pybind11::type_error(key + " must be an int, got " + detail::type_name(h));
-  pybind11::object i = pybind11::reinterpret_steal<pybind11::object>(PyNumber_Index(h.ptr()));
-  if (!i) {
-    PyErr_Clear();
-    throw pybind11::type_error(key + " must be an int, got " + detail::type_name(h));
-  }
+  pybind11::object i = detail::as_index(key, h);
   int overflow = 0;
   const long long v = PyLong_AsLongLongAndOverflow(i.ptr(), &overflow);
   if (PyErr_Occurred()) PyErr_Clear();
@@ -78,6 +84,17 @@ inline int to_int(const std::string& key, const pybind11::handle& h, long long l
                                 "], got " + got);
   }
   return static_cast<int>(v);
+}
+
+// An integer in [0, 2^64 - 1] (a seed): int or a numpy integer, as to_int refuses others.
+inline std::uint64_t to_uint64(const std::string& key, const pybind11::handle& h) {
+  pybind11::object i = detail::as_index(key, h);
+  const unsigned long long v = PyLong_AsUnsignedLongLong(i.ptr());
+  if (PyErr_Occurred()) {
+    PyErr_Clear();
+    throw pybind11::value_error(key + " must be in [0, 2^64 - 1], got " + pybind11::str(i).cast<std::string>());
+  }
+  return v;
 }
 
 // A bool (Python or numpy); 0/1 integers are refused so a typo of a number is not read as a flag.

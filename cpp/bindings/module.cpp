@@ -14,4 +14,5 @@ PYBIND11_MODULE(_core, m) {
   thinburn::bind::define_bending(m);
   thinburn::bind::define_control_surface(m);
   thinburn::bind::define_colliders(m);
+  thinburn::bind::define_param_table(m);
 }

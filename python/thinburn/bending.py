@@ -15,8 +15,9 @@ import numpy as np
 
 from . import _core
 from . import _validate as V
+from .params import names
 
-KEYS = ("ct", "cp", "alpha", "beta", "d_min", "max_rotation", "heat_tolerance", "heat_fast")
+KEYS = names("bending")  # ct, cp, alpha, beta, d_min, max_rotation, heat_tolerance, heat_fast
 DEFAULTS = dict(_core.Bending(1).params)
 
 

@@ -15,25 +15,17 @@ import numpy as np
 
 from . import _core
 from .heat import _int, _points, _real, _vector
+from .params import FIELDS
 
 __all__ = ["ParticleSystem", "DEFAULTS"]
 
 #: The default parameters (a burning sheet of paper: flames about 3-10 cm tall).
 DEFAULTS = dict(_core.ParticleSystem().params)
 
-# name -> (low, high, low_open, high_open) for real parameters
-_REAL_RANGES = {
-    "birth_rate": (0.0, None, False, False),
-    "temperature0": (0.0, None, True, False),
-    "cooling": (0.0, None, False, False),
-    "lifetime": (0.0, None, True, False),
-    "lifetime_jitter": (0.0, 1.0, False, True),
-    "buoyancy": (0.0, None, False, False),
-    "drag": (0.0, None, False, False),
-    "turbulence": (0.0, None, False, False),
-    "birth_speed": (0.0, None, False, False),
-    "vertical_band": (0.0, 1.0, False, False),
-}
+# name -> (low, high, low_open, high_open) for real parameters: the core's table's bounds.
+_REAL_RANGES = {f.name: (f.low, f.high, f.low_open, f.high_open)
+                for f in FIELDS["particles"].values() if f.kind == "real"}
+_CAPACITY = FIELDS["particles"]["capacity"]
 
 
 def _validate_params(kwargs: dict) -> dict:
@@ -43,7 +35,7 @@ def _validate_params(kwargs: dict) -> dict:
     out = {}
     for name, value in kwargs.items():
         if name == "capacity":
-            out[name] = _int(name, value, low=1, high=100_000_000)
+            out[name] = _int(name, value, low=int(_CAPACITY.low), high=int(_CAPACITY.high))
         elif name == "seed":
             out[name] = _int(name, value, low=0, high=2**64 - 1)
         else:

@@ -10,16 +10,17 @@ from . import _core
 from . import _validate as V
 from ._threads import resolve_threads
 from .colliders import Colliders
+from .params import FIELDS, names as _names
 from .materials import IGNITION_TEMPERATURE, Material, resolve_material
 
-FRONT_METHODS = ("cellular", "cellular16", "fmm1", "fmm")
+FRONT_METHODS = tuple(FIELDS["simulation"]["front"].choices)  # cellular, cellular16, fmm1, fmm
 
 INTEGRATORS = ("implicit", "bdf2", "symplectic", "explicit")
 # Where the cells and the lattice live (docs/surface_front.md, "Which cells"): "plane", the
 # paper's N x N grid over the rest plane (or the UV map) and an M x M lattice; "surface", cells
 # on the surface itself and a lattice on a control surface fitted to it; "auto", the plane for
 # a flat mesh (or for the cellular fronts, defined on a grid only), the surface for any other.
-GEOMETRIES = ("auto", "plane", "surface")
+GEOMETRIES = tuple(FIELDS["simulation"]["geometry"].choices)  # auto, plane, surface
 
 # Coordinates the model can take (r6, measured): offsets up to 1e6 m keep the motion within
 # 1e-8 m of the same sheet at the origin (1e8 m: 3e-7 m, 1e10 m: 5e-5 m); a sheet smaller than
@@ -29,7 +30,7 @@ MIN_EXTENT = 1e-6     # m, smallest allowed largest side of the sheet's bounding
 # The largest lattice: a step costs ~M^2 (measured, one core, an A4 sheet at 128 cells, fire
 # started: M = 33 0.3 s a step, 65 about 2 s, 129 about 10 s, 257 over 40 s); the default
 # lattice never exceeds 65.
-MAX_LATTICE = 129
+MAX_LATTICE = int(FIELDS["simulation"]["lattice"].high)  # 129
 # Wind, m/s: 1e10 still gives finite results, 1e150 fails inside a step (particle normals
 # overflow) and 1e300 silently does nothing; no real wind comes near 1000 m/s.
 MAX_WIND = 1e3
@@ -38,32 +39,26 @@ MAX_WIND = 1e3
 MAX_RUN_STEPS = 10_000_000
 
 # Keyword overrides of the shell's parts, passed on to the core's parameter groups (which
-# validate them and name the field in their errors). See docs/dynamics.md, docs/particles.md,
-# docs/bending.md for units and meanings.
-DYNAMICS_KEYS = ("k_thickness", "k_transverse", "stiffness_unit", "flexural_rigidity", "buoyancy", "wind_drag", "friction",
-                 "self_collision", "self_distance", "strain_limit",
-                 "crumple_gain", "plasticity", "crumple_momentum", "bimetal", "anisotropic_curl", "sleep_speed", "sleeping", "substeps", "max_substeps",
-                 "safety", "max_stretch", "cg_tolerance", "cg_max_iterations", "gravity",
-                 "preconditioner", "ldlt_max_vertices", "refactor_iterations", "wake_hold")
-BENDING_KEYS = ("ct", "alpha", "beta", "d_min", "max_rotation", "heat_tolerance", "heat_fast")
+# validate them and name the field in their errors): every field of their tables
+# (thinburn.params, cpp/param_table.hpp) but those the Simulation sets from its own arguments or
+# its material. See docs/dynamics.md, docs/particles.md, docs/bending.md for units and meanings.
+DYNAMICS_KEYS = _names("dynamics", exclude=(
+    "k_structure", "k_shear", "k_flex", "c_damping",  # the material's Table 1 row (set_material)
+    "has_floor", "floor_z", "integrator"))            # floor=, integrator=
+BENDING_KEYS = _names("bending", exclude=("cp",))  # the material's Cp
 PARTICLE_PREFIX = "particle_"
-PARTICLE_KEYS = ("capacity", "birth_rate", "temperature0", "cooling", "lifetime", "lifetime_jitter",
-                 "buoyancy", "drag", "turbulence", "birth_speed", "vertical_band")
+PARTICLE_KEYS = _names("particles", exclude=("seed",))  # seed=
 
-# Keyword overrides accepted by Simulation(**params), with their bounds.
-_PARAM_BOUNDS = {
-    "cv": dict(low=0.0),
-    "v_floor": dict(low=0.0, high=1.0, low_open=True),
-    "speed_noise": dict(low=0.0, high=0.9),
-    "duration_noise": dict(low=0.0, high=0.9),
-    "climb": dict(low=0.0, high=0.9),
-    "wind_spread": dict(low=0.0),
-    "max_drive": dict(low=0.0, high=0.95),
-    "ash_fraction": dict(low=0.0, high=1.0),
-    "ash_strength": dict(low=0.0, high=1.0),
-    "ignition_gain": dict(low=0.0, low_open=True),
-    "heat_loss": dict(low=0.0),
-}
+# Keyword overrides accepted by Simulation(**params), with their bounds: the fire's scalars of
+# the core's table but the Simulation's own arguments and what only the material sets.
+_FIRE_KEYS = _names("simulation", exclude=(
+    "cells", "geometry", "front", "seed", "shell", "lattice", "has_floor", "floor_z",  # arguments
+    "finish_within", "ignition_temperature",                    # finish_within=, heat_ignites=
+    "v0", "burn_duration", "areal_density",                     # the material's
+    "lattice_thickness"))                                       # chosen from the lattice
+_PARAM_BOUNDS = {k: FIELDS["simulation"][k].bounds() for k in _FIRE_KEYS}
+# The core reads an ignition gain of 0 as "heat does not ignite"; a keyword must give a gain.
+_PARAM_BOUNDS["ignition_gain"]["low_open"] = True
 # Eq 2's Ct for the cells' temperature when heat ignites, m²/s (docs/heat.md, "Heat ignites"):
 # calibrated on two 15 cm paper sheets, the lower lit at its centre (scripts/heat_ignition.py,
 # 32 cells): the upper one catches fire 1.3 s later 1 cm above it, 2.3 s later 3 cm above, not
@@ -148,11 +143,12 @@ class Simulation:
           ``sleeping``, ``substeps`` (0, the default, chooses them per step; a fixed count is
           at most 10000, each one costs a sweep of the lattice), ``max_substeps`` (10000,
           at most 1e6: an explicit step that needs more raises), ``safety``, ``max_stretch``,
-          ``cg_tolerance``, ``cg_max_iterations``, ``gravity``, ``preconditioner`` of the implicit
-          solve's conjugate gradients ("auto", the default: a sparse block LDL^T factorization, kept
-          while it stays good, up to ``ldlt_max_vertices`` (600) awake lattice vertices, couple-block
-          Jacobi above; "ldlt"; "jacobi"), ``refactor_iterations``, ``wake_hold`` (steps a
-          vertex woken again soon after falling asleep stays awake, doubling per repeat);
+          ``cg_tolerance``, ``cg_velocity_tolerance``, ``cg_max_iterations``, ``gravity``,
+          ``preconditioner`` of the implicit solve's conjugate gradients ("auto", the default:
+          a sparse block LDL^T factorization, kept while it stays good, up to
+          ``ldlt_max_vertices`` (600) awake lattice vertices, couple-block Jacobi above;
+          "ldlt"; "jacobi"), ``refactor_iterations``, ``wake_hold`` (steps a vertex woken
+          again soon after falling asleep stays awake, doubling per repeat);
         * the particles, prefixed ``particle_``: ``particle_capacity``,
           ``particle_birth_rate``, ``particle_temperature0``, ``particle_cooling``,
           ``particle_lifetime``, ``particle_lifetime_jitter``, ``particle_buoyancy``,
@@ -243,14 +239,15 @@ class Simulation:
     def _fire_params(mat: Material, cells: int, seed: int, front: str, overrides: dict):
         p = _core.SimulationParams()
         p.cells, p.seed, p.front = cells, seed, front
-        p.v0 = V.real(mat.v0, "material.V0", low=0.0, low_open=True)
-        p.cv = V.real(mat.Cv, "material.Cv", low=0.0)
-        p.burn_duration = V.real(mat.burn_duration, "material.burn_duration", low=0.0, low_open=True)
-        p.speed_noise = V.real(mat.speed_noise, "material.speed_noise", low=0.0, high=0.9)
-        p.duration_noise = V.real(mat.duration_noise, "material.duration_noise", low=0.0, high=0.9)
-        p.areal_density = V.real(mat.areal_density, "material.mass", low=0.0, low_open=True)
-        p.ash_fraction = V.real(mat.ash_fraction, "material.ash_fraction", low=0.0, high=1.0)
-        p.ash_strength = V.real(mat.ash_strength, "material.ash_strength", low=0.0, high=1.0)
+        fire = FIELDS["simulation"]
+        for key, value, name in (("v0", mat.v0, "V0"), ("cv", mat.Cv, "Cv"),
+                                 ("burn_duration", mat.burn_duration, "burn_duration"),
+                                 ("speed_noise", mat.speed_noise, "speed_noise"),
+                                 ("duration_noise", mat.duration_noise, "duration_noise"),
+                                 ("areal_density", mat.areal_density, "mass"),
+                                 ("ash_fraction", mat.ash_fraction, "ash_fraction"),
+                                 ("ash_strength", mat.ash_strength, "ash_strength")):
+            setattr(p, key, V.real(value, "material." + name, **fire[key].bounds()))
         for key, value in overrides.items():
             if key not in _PARAM_BOUNDS:
                 known = sorted(_PARAM_BOUNDS) + list(DYNAMICS_KEYS) + list(BENDING_KEYS) + [
