@@ -866,7 +866,7 @@ int LatticeDynamics::integrate(double dt, int substeps, StepStats& st) {
       else
         explicit_substep(h, p_.integrator == Integrator::Explicit);
       if (p_.strain_limit > 0.0)
-        st.strain_limited += strain_limit_->apply(p_.strain_limit, lat_.positions(), vel_, mass_, slot_, strength_);
+        st.strain_limited += strain_limit_->apply(p_.strain_limit, lat_.positions(), vel_, mass_, slot_);
       apply_floor(h);
       apply_colliders(h);
       if (p_.self_collision)

@@ -24,13 +24,12 @@ StrainLimit::StrainLimit(const LatticeTopology& topology, const RowMatX3& rest) 
 }
 
 int StrainLimit::apply(double limit, RowMatX3& x, RowMatX3& v, const Eigen::VectorXd& mass,
-                       const std::vector<int>& slot, const Eigen::VectorXd& strength) {
+                       const std::vector<int>& slot) {
   auto moves = [&](int c) { return slot[2 * c] >= 0 && slot[2 * c + 1] >= 0; };
-  auto intact = [&](int c) { return strength[2 * c] >= kIntact && strength[2 * c + 1] >= kIntact; };
   candidates_.clear();
   for (int e = 0; e < size(); ++e) {
     const int a = ca_[e], b = cb_[e];
-    if ((moves(a) || moves(b)) && intact(a) && intact(b) && rest_[e] > 0.0) candidates_.push_back(e);
+    if ((moves(a) || moves(b)) && rest_[e] > 0.0) candidates_.push_back(e);
   }
   int first = 0;
   const double inside = (1.0 - kInside) * limit;

@@ -38,17 +38,14 @@ class StrainLimit {
   double rest(int e) const { return rest_[e]; }
 
   /// @brief Keep |l / L - 1| <= limit (> 0) for every pair of which at least one couple moves
-  /// (both its vertices have slot >= 0) and whose four vertices keep at least kIntact of their
-  /// strength (burnt cells are free to shrink: docs/dynamics.md §3.4). Gauss-Seidel sweeps in a
+  /// (both its vertices have slot >= 0), burnt or not: freeing charring pairs let the unburnt
+  /// sheet beside them stretch 5.5-7.2 % (docs/dynamics.md §3.4). Gauss-Seidel sweeps in a
   /// fixed order (deterministic), at most kSweeps; a pair beyond the limit is put kInside of it
   /// inside, and loses the part of its centres' relative speed that takes it further out.
   /// Returns the pairs corrected in the first sweep.
   int apply(double limit, RowMatX3& x, RowMatX3& v, const Eigen::VectorXd& mass,
-            const std::vector<int>& slot, const Eigen::VectorXd& strength);
+            const std::vector<int>& slot);
 
-  /// Strength (1 intact) below which a pair is not limited: a vertex whose cells have begun to
-  /// char (strength falls towards the ash's as char rises, docs/dynamics.md).
-  static constexpr double kIntact = 0.5;
   /// Most sweeps per call. A call stops at the first sweep that finds nothing beyond the limit;
   /// a substep moves the sheet little, so most stop after one.
   static constexpr int kSweeps = 64;

@@ -102,21 +102,17 @@ def test_limit_moves_couples_whole():
     assert out[0] == pytest.approx(out[1], abs=1e-9)
 
 
-def test_burnt_pairs_are_free():
-    # Couples whose strength fell below 0.95 (charring) are not limited: with every vertex at
-    # ash's strength, the limited sheet stretches as the unlimited one.
-    results = []
-    for limit in (0.0, 0.03):
-        lat, dyn = make(k_structure=0.002, k_shear=0.002, k_flex=0.002, gravity=(0, 0, -98.1),
-                        strain_limit=limit)
-        pinned = np.zeros(72, np.uint8)
-        pinned[60:] = 1
-        dyn.set_pinned(pinned)
-        dyn.set_strength(np.full(72, 0.9))
-        for _ in range(12):
-            dyn.step(1 / 24, np.zeros(36), np.zeros(72))
-        results.append(lat.positions.copy())
-    assert np.array_equal(results[0], results[1])
+def test_weak_ash_is_held_too():
+    # Burnt sheet (every vertex at ash's strength) is limited as the intact sheet: freeing
+    # charring pairs let the unburnt sheet beside them stretch (docs/dynamics.md §3.4).
+    lat, dyn = make(k_structure=0.002, k_shear=0.002, k_flex=0.002, gravity=(0, 0, -98.1), strain_limit=0.03)
+    pinned = np.zeros(72, np.uint8)
+    pinned[60:] = 1
+    dyn.set_pinned(pinned)
+    dyn.set_strength(np.full(72, 0.1))
+    for _ in range(12):
+        dyn.step(1 / 24, np.zeros(36), np.zeros(72))
+        assert pair_strains(lat, dyn).max() <= 0.03 * (1 + 1e-6)
 
 
 def test_bad_limit_names_the_argument():
