@@ -29,9 +29,11 @@ MATERIAL_FIELDS = {
     "K_shear": ("Shear Stiffness", "Stiffness of the lattice's shear springs (Table 1)", 0.0, 100.0),
     "K_flex": ("Flex Stiffness", "Stiffness of the lattice's two-apart springs (Table 1); with a Bending Rigidity set, the sheet bends with that instead", 0.0, 100.0),
     "flexural_rigidity": ("Bending Rigidity", "The sheet's own bending stiffness in µN·m (a plate's E·t³/12): cloth 5, silk 3, curtain 20. 0 bends with the lattice's own layers, about 100× a real paper's (the paper preset: a soft paper lifts off its table in a breeze)", 0.0, 1e6),
+    "strain_limit": ("Stretch Limit", "The most, in %, that the unburnt sheet may stretch or squash: a heavy, soft fabric otherwise sags out of shape under its own weight. 0 lets the springs alone decide", 0.0, 99.0),
 }
 # Fields shown in another unit than the core's: the core's value is the panel's times this.
-MATERIAL_UNITS = {"flexural_rigidity": 1e-6}  # µN·m in the panel, N·m in the core
+MATERIAL_UNITS = {"flexural_rigidity": 1e-6,  # µN·m in the panel, N·m in the core
+                  "strain_limit": 0.01}  # % in the panel, a fraction in the core
 
 
 def _default(group: str, key: str) -> float:

@@ -88,6 +88,9 @@ const std::vector<param::Field<DynamicsParams>>& DynamicsParams::fields() {
       field("self_distance", &P::self_distance, above(0),
             "lattice thicknesses a couple keeps from other parts of the sheet",
             "it counts lattice thicknesses"),
+      field("strain_limit", &P::strain_limit, within(0, 1, false, true),
+            "largest |l / L - 1| between neighbouring couples' centres (0: none)",
+            "0 turns the limit off"),
       choice("integrator", &P::integrator, "Integrator", {"explicit", "symplectic", "implicit", "bdf2"},
              "the lattice's time integrator"),
       field("crumple_gain", &P::crumple_gain, "multiplies the increase of D turned into a crumple"),
@@ -168,6 +171,7 @@ LatticeDynamics::LatticeDynamics(FfdLattice& lattice, const DynamicsParams& p, L
   D_prev_ = delta_ = Eigen::VectorXd::Zero(C_);
   pinned_.assign(n_, 0);
   self_contact_ = std::make_unique<SelfContact>(topo_, lat_.rest());
+  strain_limit_ = std::make_unique<StrainLimit>(topo_, lat_.rest());
   bimetal_.build();
   bend_share_ = target_share();
   if (bend_share_ < 1.0) add_membrane();
@@ -294,6 +298,7 @@ void LatticeDynamics::set_params(const DynamicsParams& p) {
       o.wind_drag != p.wind_drag || o.has_floor != p.has_floor || o.floor_z != p.floor_z ||
       o.friction != p.friction || o.integrator != p.integrator || o.sleeping != p.sleeping ||
       o.sleep_speed != p.sleep_speed || o.bimetal != p.bimetal || o.flexural_rigidity != p.flexural_rigidity ||
+      o.strain_limit != p.strain_limit ||
       (p.bimetal && o.crumple_gain != p.crumple_gain);
   if (o.integrator != p.integrator) forget_history();
   if (p.bimetal && (!o.bimetal || o.crumple_gain != p.crumple_gain || o.anisotropic_curl != p.anisotropic_curl)) bimetal_all_ = true;
@@ -557,6 +562,8 @@ int LatticeDynamics::integrate(double dt, int substeps, StepStats& st) {
         st.cg_iterations += implicit_substep(h);
       else
         explicit_substep(h, p_.integrator == Integrator::Explicit);
+      if (p_.strain_limit > 0.0)
+        st.strain_limited += strain_limit_->apply(p_.strain_limit, lat_.positions(), vel_, mass_, slot_);
       contacts_.apply_floor(h);
       contacts_.apply_colliders(h);
       if (p_.self_collision)

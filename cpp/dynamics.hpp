@@ -20,6 +20,7 @@
 #include "param_table.hpp"
 #include "self_contact.hpp"
 #include "sleeping.hpp"
+#include "strain_limit.hpp"
 
 namespace thinburn {
 
@@ -69,6 +70,9 @@ struct DynamicsParams {
   double friction = 0.5;       ///< Coulomb coefficient on the floor (>= 0)
   bool self_collision = true;  ///< couples keep self_distance from the sheet's other layers (self_contact.hpp)
   double self_distance = 1.0;  ///< lattice thicknesses between a couple's mid-point and another part of the sheet (> 0)
+  /// Largest |l / L - 1| of the distance between neighbouring couples' centres, kept after each
+  /// substep (strain_limit.hpp); 0: no limit, in [0, 1).
+  double strain_limit = 0.0;
   Integrator integrator = Integrator::Implicit;
   double crumple_gain = 1.0;   ///< multiplies the increase of D turned into a crumple (set_material: kCrumpleReferenceK / k_structure)
   double plasticity = 1.0;     ///< in [0, 1]: share of each crumple that the springs' rest lengths keep
@@ -130,6 +134,7 @@ struct StepStats {
   int passes = 0;         ///< integrations of the step (> 1 when it woke sleepers and redid it)
   double max_strain = 0;  ///< largest |l / L - 1| of an awake vertex's springs at the step's end
   int stretch_redos = 0;  ///< integrations redone with more substeps because a spring overstretched
+  int strain_limited = 0; ///< couple pairs the strain limit put back on its bound, all substeps and passes
 };
 
 /// @brief Springs, forces and integration of an FfdLattice's control vertices.
@@ -291,6 +296,7 @@ class LatticeDynamics {
   Eigen::VectorXd heat_save_;        // restored, with rest_save_, when a step throws
   std::vector<double> rest_save_;
   std::unique_ptr<SelfContact> self_contact_;  // after each substep, as apply_colliders
+  std::unique_ptr<StrainLimit> strain_limit_;  // after each substep, before the floor
   // The concerns split off, in this order (each views the members above and those before it).
   Bimetal bimetal_;                 // the curl's rest lengths
   Sleeping sleep_;                  // who is awake; the active set

@@ -56,6 +56,7 @@ void define_dynamics(py::module_& m) {
       .def_readonly("omega_max", &StepStats::omega_max, "rad/s, bound on the largest frequency.")
       .def_readonly("max_strain", &StepStats::max_strain, "Largest |l/L - 1| of an awake vertex's springs at the end.")
       .def_readonly("stretch_redos", &StepStats::stretch_redos, "Integrations redone with more substeps for an overstretched spring.")
+      .def_readonly("strain_limited", &StepStats::strain_limited, "Couple pairs put back on the strain limit, all substeps and passes.")
       .def_readonly("passes", &StepStats::passes)
       .def("__repr__", [](const StepStats& s) {
         return "StepStats(substeps=" + std::to_string(s.substeps) + ", awake=" +

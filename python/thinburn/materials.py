@@ -42,6 +42,9 @@ class Material:
     # The sheet's flexural rigidity B, N m (bending ∝ thickness^3; docs/materials.md): the
     # lattice's layers bend with it instead of their own, much stiffer, rigidity. 0: the lattice's.
     flexural_rigidity: float = 0.0
+    # Largest stretch or squash of the intact sheet's mid-surface (docs/dynamics.md §3.4): Table
+    # 1's springs let a soft, heavy fabric stretch under its own weight. 0: no limit.
+    strain_limit: float = 0.0
 
     @property
     def areal_density(self) -> float:
@@ -63,16 +66,18 @@ class Material:
 
 _TABLE1 = (
     # name, mass, V0, Cp, C_damping, K_structure, K_shear, K_flex, figure, then ours:
-    # burn_duration, flexural_rigidity (N m, docs/materials.md "Bending"), ash_strength
-    ("paper", 0.45, 3.5, 1.0, 1.7, 0.05, 0.05, 0.05, 8, 4.0, 0.0, 0.1),
-    ("cloth", 1.45, 4.0, 0.8, 2.5, 0.3, 0.01, 0.04, 9, 6.0, 5e-6, 0.03),
-    ("hard_paper", 10.45, 3.5, 1.0, 1.7, 0.5, 0.01, 0.001, 10, 6.0, 0.5, 0.1),
-    ("silk", 6.45, 4.0, 0.8, 2.5, 0.01, 0.01, 0.01, 11, 3.0, 3e-6, 0.03),
-    ("curtain", 1.45, 4.0, 0.8, 2.5, 0.3, 0.01, 0.04, 12, 6.0, 2e-5, 0.03),
+    # burn_duration, flexural_rigidity (N m, docs/materials.md "Bending"), ash_strength,
+    # strain_limit (docs/materials.md "Stretch")
+    ("paper", 0.45, 3.5, 1.0, 1.7, 0.05, 0.05, 0.05, 8, 4.0, 0.0, 0.1, 0.0),
+    ("cloth", 1.45, 4.0, 0.8, 2.5, 0.3, 0.01, 0.04, 9, 6.0, 5e-6, 0.03, 0.03),
+    ("hard_paper", 10.45, 3.5, 1.0, 1.7, 0.5, 0.01, 0.001, 10, 6.0, 0.5, 0.1, 0.0),
+    ("silk", 6.45, 4.0, 0.8, 2.5, 0.01, 0.01, 0.01, 11, 3.0, 3e-6, 0.03, 0.03),
+    ("curtain", 1.45, 4.0, 0.8, 2.5, 0.3, 0.01, 0.04, 12, 6.0, 2e-5, 0.03, 0.03),
 )
 
 MATERIALS = MappingProxyType({
-    row[0]: Material(*row[:9], burn_duration=row[9], flexural_rigidity=row[10], ash_strength=row[11])
+    row[0]: Material(*row[:9], burn_duration=row[9], flexural_rigidity=row[10], ash_strength=row[11],
+                     strain_limit=row[12])
     for row in _TABLE1
 })
 """The five presets of Table 1, by name."""

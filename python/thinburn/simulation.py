@@ -134,7 +134,9 @@ class Simulation:
           ``heat_tolerance``, ``heat_fast``;
         * the motion: ``k_thickness``, ``k_transverse``, ``stiffness_unit``,
           ``flexural_rigidity`` (N m, default the material's: the sheet bends with it, not with
-          the lattice's own layers, docs/dynamics.md §1.1), ``buoyancy``,
+          the lattice's own layers, docs/dynamics.md §1.1), ``strain_limit`` (default the
+          material's: the largest stretch or squash of the intact sheet's mid-surface between
+          neighbouring couples, 0 = none, docs/dynamics.md §3.4), ``buoyancy``,
           ``wind_drag``, ``friction``, ``crumple_gain``, ``plasticity``, ``crumple_momentum``,
           ``bimetal`` (default True: D shrinks the heated face's springs, docs/dynamics.md §2;
           False: the paper's prescribed chord motion), ``sleep_speed``,
@@ -225,7 +227,8 @@ class Simulation:
                    dict(k_structure=mat.K_structure, k_shear=mat.K_shear, k_flex=mat.K_flex,
                         c_damping=mat.C_damping))
         # The sheet's own bending (docs/dynamics.md §1.1; 0: the lattice's).
-        _set_group(p.set_dynamics, "material", dict(flexural_rigidity=mat.flexural_rigidity))
+        _set_group(p.set_dynamics, "material", dict(flexural_rigidity=mat.flexural_rigidity,
+                                                    strain_limit=mat.strain_limit))
         _set_group(p.set_bending, "material", dict(cp=mat.Cp, alpha=mat.alpha, beta=mat.beta))
         _set_group(p.set_dynamics, None, groups["dynamics"])
         _set_group(p.set_bending, None, groups["bending"])
