@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "lattice.hpp"
 #include "threads.hpp"
 
 namespace thinburn {
@@ -51,10 +52,6 @@ Eigen::Vector3d turn_about(const Eigen::Vector3d& co, const Eigen::Vector3d& n, 
 Eigen::Vector3d turn(const Grid& g, int oi, int oj, bool along_j, double delta,
                      const Eigen::Vector3d& ca, const Eigen::Vector3d& p) {
   return turn_about(g.centre(oi, oj), g.normal(oi, oj), g.tangent(oi, oj, along_j), delta, ca, p);
-}
-
-Eigen::Vector3d couple_centre(const RowMatX3& pos, int c) {
-  return 0.5 * (pos.row(2 * c) + pos.row(2 * c + 1)).transpose();
 }
 
 // Bottom -> top of couple c (+z if it collapsed: a control-surface couple never has zero

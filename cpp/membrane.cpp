@@ -118,7 +118,7 @@ void Membrane::link(const std::vector<int>& sa, const std::vector<int>& sb, cons
     couple_elem_[cf[cb_[e]]++] = e;
   }
   base_.resize(ne);
-  for (int e = 0; e < ne; ++e) base_[e] = (centre(rest, cb_[e]) - centre(rest, ca_[e])).norm();
+  for (int e = 0; e < ne; ++e) base_[e] = (couple_centre(rest, cb_[e]) - couple_centre(rest, ca_[e])).norm();
   rest_ = base_;
   k_.assign(ne, 0.0);
   jac_.assign(ne, Eigen::Matrix3d::Zero());
@@ -126,11 +126,11 @@ void Membrane::link(const std::vector<int>& sa, const std::vector<int>& sb, cons
 
 Eigen::Vector3d Membrane::force(int v, const RowMatX3& x) const {
   const int c = v / 2;
-  const Eigen::Vector3d me = centre(x, c);
+  const Eigen::Vector3d me = couple_centre(x, c);
   Eigen::Vector3d f = Eigen::Vector3d::Zero();
   for (int q = couple_start_[c]; q < couple_start_[c + 1]; ++q) {
     const int e = couple_elem_[q];
-    const Eigen::Vector3d d = centre(x, ca_[e] == c ? cb_[e] : ca_[e]) - me;
+    const Eigen::Vector3d d = couple_centre(x, ca_[e] == c ? cb_[e] : ca_[e]) - me;
     const double l = d.norm();
     if (l > 1e-300) f += 0.5 * k_[e] * (l - rest_[e]) / l * d;
   }
@@ -140,7 +140,7 @@ Eigen::Vector3d Membrane::force(int v, const RowMatX3& x) const {
 double Membrane::energy(const RowMatX3& x) const {
   double w = 0.0;
   for (int e = 0; e < size(); ++e) {
-    const double dl = (centre(x, cb_[e]) - centre(x, ca_[e])).norm() - rest_[e];
+    const double dl = (couple_centre(x, cb_[e]) - couple_centre(x, ca_[e])).norm() - rest_[e];
     w += 0.5 * k_[e] * dl * dl;
   }
   return w;
@@ -152,7 +152,7 @@ double Membrane::max_strain(const RowMatX3& x, const std::vector<int>& slot) con
     const int a = ca_[e], b = cb_[e];
     if (slot[2 * a] < 0 && slot[2 * a + 1] < 0 && slot[2 * b] < 0 && slot[2 * b + 1] < 0) continue;
     if (rest_[e] <= 0.0) continue;
-    worst = std::max(worst, std::abs((centre(x, b) - centre(x, a)).norm() / rest_[e] - 1.0));
+    worst = std::max(worst, std::abs((couple_centre(x, b) - couple_centre(x, a)).norm() / rest_[e] - 1.0));
   }
   return worst;
 }
@@ -162,7 +162,7 @@ void Membrane::blocks(const RowMatX3& x, const std::vector<int>& slot, bool clam
     const int e = static_cast<int>(e_);
     const int a = ca_[e], b = cb_[e];
     if (!slot.empty() && slot[2 * a] < 0 && slot[2 * a + 1] < 0 && slot[2 * b] < 0 && slot[2 * b + 1] < 0) return;
-    jac_[e] = spring_block(centre(x, b) - centre(x, a), k_[e], rest_[e], clamp);
+    jac_[e] = spring_block(couple_centre(x, b) - couple_centre(x, a), k_[e], rest_[e], clamp);
   });
 }
 
@@ -179,7 +179,7 @@ double Membrane::row_bound(int v, const RowMatX3& x, const Eigen::VectorXd& mass
   for (int q = couple_start_[c]; q < couple_start_[c + 1]; ++q) {
     const int e = couple_elem_[q];
     const int o = ca_[e] == c ? cb_[e] : ca_[e];
-    const double l = (centre(x, o) - centre(x, c)).norm();
+    const double l = (couple_centre(x, o) - couple_centre(x, c)).norm();
     const double g = l > 1e-300 ? std::abs(1.0 - rest_[e] / l) : 1.0;
     const double w = 0.25 * k_[e] * std::max(1.0, g) / std::sqrt(mass(v));
     b += w * (1.0 / std::sqrt(mass(v)) + 1.0 / std::sqrt(mass(v ^ 1)) + 1.0 / std::sqrt(mass(2 * o)) +

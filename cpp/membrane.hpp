@@ -81,9 +81,6 @@ class Membrane {
   double row_bound(int v, const RowMatX3& x, const Eigen::VectorXd& mass) const;
 
  private:
-  Eigen::Vector3d centre(const RowMatX3& x, int c) const {
-    return 0.5 * (x.row(2 * c) + x.row(2 * c + 1)).transpose();
-  }
   std::vector<int> ca_, cb_, top_, bot_;
   std::vector<std::uint8_t> carried_;
   std::vector<double> k_, rest_, base_;

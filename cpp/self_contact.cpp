@@ -137,10 +137,6 @@ bool SelfContact::neighbours(int c, const Eigen::Vector3i& t) const {
   return false;
 }
 
-Eigen::Vector3d SelfContact::mid(const RowMatX3& x, int c) {
-  return 0.5 * (x.row(2 * c) + x.row(2 * c + 1)).transpose();
-}
-
 int SelfContact::apply(double sep, RowMatX3& x, RowMatX3& v, const Eigen::VectorXd& mass,
                        const std::vector<int>& slot) {
   moving_.clear();
@@ -149,7 +145,7 @@ int SelfContact::apply(double sep, RowMatX3& x, RowMatX3& v, const Eigen::Vector
   if (moving_.empty() || tri_.empty() || !(sep > 0.0)) return 0;
   if (last_.rows() != C_) {
     last_.resize(C_, 3);
-    for (int c = 0; c < C_; ++c) last_.row(c) = mid(x, c).transpose();
+    for (int c = 0; c < C_; ++c) last_.row(c) = couple_centre(x, c).transpose();
   }
   if (!broad_valid(sep, x)) broad_phase(sep, x);
   pairs_.clear();
@@ -161,7 +157,7 @@ int SelfContact::apply(double sep, RowMatX3& x, RowMatX3& v, const Eigen::Vector
     for (int c : involved_) {
       if (inv_(c) == 0.0) continue;
       const double m0 = mass(2 * c), m1 = mass(2 * c + 1);
-      const Eigen::RowVector3d dx = mid_.row(c) - mid(x, c).transpose();
+      const Eigen::RowVector3d dx = mid_.row(c) - couple_centre(x, c).transpose();
       const Eigen::RowVector3d dv = vmid_.row(c) - (m0 * v.row(2 * c) + m1 * v.row(2 * c + 1)) * inv_(c);
       for (int k = 0; k < 2; ++k) {
         x.row(2 * c + k) += dx;
@@ -169,7 +165,7 @@ int SelfContact::apply(double sep, RowMatX3& x, RowMatX3& v, const Eigen::Vector
       }
     }
   }
-  for (int c : moving_) last_.row(c) = mid(x, c).transpose();
+  for (int c : moving_) last_.row(c) = couple_centre(x, c).transpose();
   return static_cast<int>(pairs_.size());
 }
 
@@ -177,7 +173,7 @@ bool SelfContact::broad_valid(double sep, const RowMatX3& x) const {
   if (broad_.rows() != C_ || broad_sep_ != sep) return false;
   const double half = 0.5 * kMargin * sep;
   for (int c : moving_)  // one that woke since was not hashed: its pairs are not candidates
-    if (!broad_moving_[c] || (mid(x, c) - broad_.row(c).transpose()).squaredNorm() >= half * half) return false;
+    if (!broad_moving_[c] || (couple_centre(x, c) - broad_.row(c).transpose()).squaredNorm() >= half * half) return false;
   return true;
 }
 
@@ -185,7 +181,7 @@ void SelfContact::broad_phase(double sep, const RowMatX3& x) {
   // Every (moving couple, triangle) pair within sep + margin now, as point to the triangle's
   // box: until a couple moves by half the margin, no other pair can come within sep.
   broad_.resize(C_, 3);
-  for (int c = 0; c < C_; ++c) broad_.row(c) = mid(x, c).transpose();
+  for (int c = 0; c < C_; ++c) broad_.row(c) = couple_centre(x, c).transpose();
   broad_sep_ = sep;
   broad_moving_.assign(C_, 0);
   for (int c : moving_) broad_moving_[c] = 1;
@@ -245,7 +241,7 @@ void SelfContact::narrow_phase(double sep, const RowMatX3& x, const RowMatX3& v,
     if (is_involved_[c]) return;
     is_involved_[c] = 1;
     involved_.push_back(c);
-    mid_.row(c) = mid(x, c).transpose();
+    mid_.row(c) = couple_centre(x, c).transpose();
     inv_(c) = 0.0;
     vmid_.row(c).setZero();
   };

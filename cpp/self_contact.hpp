@@ -55,7 +55,6 @@ class SelfContact {
     double b[3];   // barycentric weights of the point's projection on the triangle
     double side;   // +1 / -1: the side of the triangle's normal the point must stay on
   };
-  static Eigen::Vector3d mid(const RowMatX3& x, int c);
   bool neighbours(int c, const Eigen::Vector3i& t) const;
   bool broad_valid(double sep, const RowMatX3& x) const;
   void broad_phase(double sep, const RowMatX3& x);
