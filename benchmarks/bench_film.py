@@ -10,8 +10,10 @@ same work in every run), the thread counts taken in turn.
 
     python -m benchmarks.bench_film [--cells 512] [--side 1000] [--frames 48] [--start 1 60]
                                  [--threads 1 2] [--repeat 2] [--reuse-output] [--out film.json]
+                                 [--variants default preconditioner=ldlt,wake_hold=0 ...]
 
-Each --start is a window: that many simulated seconds are stepped untimed first (the fire
+Each --variant is a set of Simulation keywords (`key=value,key=value`; `default`: none); the
+variants' runs interleave with the thread counts', so a change of load biases none. Each --start is a window: that many simulated seconds are stepped untimed first (the fire
 then covers a 1 cm disc at 1 s, a 20 cm quarter-disc at 60 s).
 """
 from __future__ import annotations
@@ -37,9 +39,26 @@ def film_mesh(side: int):
     return rect_sheet(SHEET, SHEET, nx=side, ny=side)
 
 
-def make_sim(verts, faces, cells: int, threads: int, reuse: bool = False):
+def parse_variant(text: str) -> dict:
+    """'key=value,key=value' -> Simulation keywords (numbers where they parse); 'default' -> {}."""
+    if text == "default":
+        return {}
+    out = {}
+    for item in text.split(","):
+        key, _, value = item.partition("=")
+        try:
+            out[key] = int(value)
+        except ValueError:
+            try:
+                out[key] = float(value)
+            except ValueError:
+                out[key] = value
+    return out
+
+
+def make_sim(verts, faces, cells: int, threads: int, reuse: bool = False, **params):
     sim = thinburn.Simulation(verts, faces, material="paper", cells=cells, threads=threads,
-                              floor=0.0)  # on a table, as the demo sheets
+                              floor=0.0, **params)  # on a table, as the demo sheets
     sim.ignite((0.0, 0.0, 0.0), time=0.0, radius=0.02)  # a corner
     return ReusedOutput(sim) if reuse else sim
 
@@ -78,19 +97,20 @@ def profile(sim, frames: int, dt: float = DT) -> dict:
 def measure(verts, faces, args, start: float, log) -> list:
     """Rows for one window: `args.frames` frames timed after `start` simulated seconds."""
     warmup = max(1, round(start * 24))
-    makers = {t: (lambda t=t: make_sim(verts, faces, args.cells, t, args.reuse_output)) for t in args.threads}
+    makers = {(v, t): (lambda v=v, t=t: make_sim(verts, faces, args.cells, t, args.reuse_output, **parse_variant(v)))
+              for v in args.variants for t in args.threads}
     load0 = os.getloadavg()
     best = interleaved_best_frames(makers, args.frames, warmup, args.repeat)
     load1 = os.getloadavg()
     rows = []
-    for t, (step_ms, pos_ms, stats, sim) in best.items():
-        r = dict(threads=t, start_seconds=start, cells=args.cells, vertices=len(verts),
+    for (variant, t), (step_ms, pos_ms, stats, sim) in best.items():
+        r = dict(variant=variant, threads=t, start_seconds=start, cells=args.cells, vertices=len(verts),
                  lattice=sim.lattice_size, reuse_output=args.reuse_output, load_before=load0,
                  load_after=load1, **frame_summary(step_ms, pos_ms, stats))
         r["profile_ms"] = profile(sim, args.profile_frames) if hasattr(sim, "phase_seconds") else {}
         r["mesh_points_redone"] = getattr(sim, "mesh_points_redone", None)
         rows.append(r)
-        log(f"start={start:5.1f} s threads={t}  {r['frames_per_second']:6.1f} frames/s  "
+        log(f"start={start:5.1f} s {variant} threads={t}  {r['frames_per_second']:6.1f} frames/s  "
             f"{r['ms_per_frame']:7.2f} ms/frame (vertex_positions {r['positions_ms']:.2f} ms)  "
             f"awake={r['awake']:.0f} burning={r['burning']:.0f} cg={r['cg_iterations']:.0f}  "
             f"load {load0[0]:.2f} -> {load1[0]:.2f}")
@@ -111,6 +131,8 @@ def main() -> None:
     ap.add_argument("--profile-frames", type=int, default=24)
     ap.add_argument("--reuse-output", action="store_true",
                     help="vertex_positions(out=...) into one array kept across frames")
+    ap.add_argument("--variants", nargs="+", default=["default"],
+                    help="Simulation keywords per variant, 'key=value,key=value' ('default': none)")
     ap.add_argument("--out", default="film.json")
     args = ap.parse_args()
     verts, faces = film_mesh(args.side)
