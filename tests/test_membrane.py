@@ -1,26 +1,16 @@
 """Soft bending (cpp/membrane.*, docs/dynamics.md §1.1): each pair of layer springs split into a
 membrane spring between the couples' centres and a bending part, so that the lattice bends with
 the sheet's flexural rigidity instead of its own."""
+from functools import partial
+
 import numpy as np
 import pytest
 
 import thinburn
-from thinburn import _core
-from thinburn.dynamics import vertex_masses
+import lattice_cases
 
-
-def centred_rest(M, L, thickness):
-    idx = np.arange(2 * M * M)
-    k, c = idx % 2, idx // 2
-    i, j = c // M, c % M
-    return np.column_stack([(j - (M - 1) / 2) * L, (i - (M - 1) / 2) * L, (k - 0.5) * thickness])
-
-
-def make(M=5, L=0.03, thickness=0.008, **params):
-    lat = _core.FfdLattice(M, centred_rest(M, L, thickness))
-    dyn = _core.LatticeDynamics(lat, **params)
-    dyn.set_masses(vertex_masses(M, ((M - 1) * L) ** 2, 0.08))
-    return lat, dyn
+# The membrane's lattice: 5 x 5 couples, 8 mm thick (lattice_cases.make's other defaults).
+make = partial(lattice_cases.make, M=5, thickness=0.008)
 
 
 def bent(rest, kappa):

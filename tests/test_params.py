@@ -10,6 +10,7 @@ import pytest
 import thinburn
 from thinburn import _core, bending, particles, simulation
 from thinburn.params import FIELDS, GROUPS, names
+from lattice_cases import grid_rest
 
 CRUMPLE_KEYS = ("max_stretch", "crumple_momentum", "bimetal", "anisotropic_curl", "crumple_gain",
                 "k_structure", "k_shear", "k_flex", "c_damping", "k_transverse")
@@ -103,12 +104,6 @@ def test_the_floor_in_force_shows_in_the_motions_parameters(a4):
 
 
 # --- the tables ------------------------------------------------------------------------------
-def _rest(M=3, L=0.03, thickness=0.003):
-    idx = np.arange(2 * M * M)
-    k, c = idx % 2, idx // 2
-    return np.column_stack([(c % M) * L, (c // M) * L, (k - 0.5) * thickness])
-
-
 # How each group's keywords reach the core, and its params dict back: the SimulationParams'
 # groups, and the parts built on their own.
 def _via_simulation_params(group, kw):
@@ -119,7 +114,7 @@ def _via_simulation_params(group, kw):
 
 def _via_part(group, kw):
     if group == "dynamics":
-        return _core.LatticeDynamics(_core.FfdLattice(3, _rest()), **kw).params
+        return _core.LatticeDynamics(_core.FfdLattice(3, grid_rest(3, 0.03, 0.003, centred=False)), **kw).params
     if group == "particles":
         return _core.ParticleSystem(**kw).params
     return _core.Bending(1, **kw).params

@@ -1,26 +1,17 @@
 """Strain limiting of the mid-surface (cpp/strain_limit.*, docs/dynamics.md §3.4): after each
 substep neighbouring couples' centres are kept within (1 +- strain_limit) of their rest
 distance, moved along the line between them in inverse proportion to their masses."""
+from functools import partial
+
 import numpy as np
 import pytest
 
-from thinburn import _core
 from thinburn.demo import build, default_scene
 from thinburn.dynamics import vertex_masses
+import lattice_cases
 
-
-def grid_rest(M, L, thickness):
-    idx = np.arange(2 * M * M)
-    k, c = idx % 2, idx // 2
-    i, j = c // M, c % M
-    return np.column_stack([j * L, i * L, (k - 0.5) * thickness])
-
-
-def make(M=6, L=0.05, thickness=0.01, **params):
-    lat = _core.FfdLattice(M, grid_rest(M, L, thickness))
-    dyn = _core.LatticeDynamics(lat, **params)
-    dyn.set_masses(vertex_masses(M, ((M - 1) * L) ** 2, 0.5))
-    return lat, dyn
+# A heavy sheet (0.5 kg/m^2) of 6 x 6 couples 5 cm apart, 1 cm thick, its corner couple at the origin.
+make = partial(lattice_cases.make, M=6, L=0.05, thickness=0.01, density=0.5, centred=False)
 
 
 def pair_strains(lat, dyn):

@@ -1,0 +1,60 @@
+"""Sleeping (cpp/sleeping.*, docs/dynamics.md §5): a lattice at rest sleeps and stays exactly
+still, a hot spot wakes only its neighbourhood and moves as without sleeping, a mass change wakes
+its vertex."""
+import numpy as np
+
+from thinburn.dynamics import vertex_masses
+from lattice_cases import CHORD, make, zeros
+
+
+def test_at_rest_everything_sleeps_and_stays_exactly_still():
+    M = 6
+    lat, dyn = make(M, has_floor=True, floor_z=-0.0015)
+    D, heat = zeros(M)
+    stats = [dyn.step(1 / 24, D, heat) for _ in range(30)]
+    assert stats[-1].awake == 0 and not dyn.awake.any()
+    x = lat.positions.copy()
+    for _ in range(5):
+        assert dyn.step(1 / 24, D, heat).awake == 0
+    assert np.array_equal(lat.positions, x)
+
+
+def hot_spot(sleeping, M=24, frames=10, wake_hold=0):
+    # wake_hold=0: each sleeper is judged afresh every step, so the awake set is the moving
+    # neighbourhood itself (the default hold keeps stressed sleepers awake a second longer).
+    # The chord crumple makes the spot: it moves its neighbourhood more than the bimetal curl.
+    lat, dyn = make(M, 0.0125, 0.002, sleeping=sleeping, has_floor=True, floor_z=-0.001,
+                    wake_hold=wake_hold, **CHORD)
+    D, heat = zeros(M)
+    c = (M // 2) * M + M // 2
+    awake = []
+    for f in range(frames):
+        D[c] = 0.02 * max(0, f - 2)
+        awake.append(dyn.step(1 / 24, D, heat).awake)
+    return lat, dyn, awake
+
+
+def test_hot_spot_wakes_only_a_neighbourhood_and_matches_no_sleeping():
+    M = 24
+    lat, dyn, awake = hot_spot(True, M)
+    assert awake[2] == 0  # settled and asleep before the spot starts
+    assert max(awake[3:]) < 0.5 * 2 * M * M
+    ii, jj = np.nonzero(dyn.awake.reshape(M, M, 2).any(axis=2))
+    assert ii.size > 0 and np.abs(ii - M // 2).max() <= 6 and np.abs(jj - M // 2).max() <= 6
+    ref, _, awake_ref = hot_spot(False, M)
+    assert min(awake_ref) == 2 * M * M
+    moved = np.abs(ref.positions - ref.rest).max()
+    assert moved > 1e-3
+    np.testing.assert_allclose(lat.positions, ref.positions, rtol=0, atol=1e-3 * moved)
+
+
+def test_mass_change_wakes_and_keeps_velocity():
+    M = 4
+    lat, dyn = make(M, gravity=[0, 0, 0])
+    D, heat = zeros(M)
+    dyn.step(1 / 24, D, heat)
+    assert not dyn.awake.any()
+    m = vertex_masses(M, (3 * 0.03) ** 2, 0.08)
+    m[5] *= 0.5
+    dyn.set_masses(m)
+    assert dyn.awake.sum() == 1 and dyn.awake[5]
