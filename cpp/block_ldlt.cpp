@@ -107,6 +107,14 @@ void BlockLdlt::analyze(int n, const std::vector<int>& col_start, const std::vec
       r_col_[slot] = k;
       r_pos_[slot] = q;
     }
+  // Column k's c blocks below the diagonal each update the pivot and the blocks below them in
+  // their row of the later columns: c (c + 1) / 2 + c products of two blocks, plus the pivot's
+  // own inverse and the scaling of the column by it.
+  factor_work_ = 0.0;
+  for (int k = 0; k < n; ++k) {
+    const double c = l_start_[k + 1] - l_start_[k];
+    factor_work_ += 27.0 * (0.5 * c * (c + 1.0) + 2.0 * c + 2.0);
+  }
   l_val_.resize(l_row_.size());
   d_.resize(n);
   d_inv_.resize(n);

@@ -34,10 +34,15 @@ class BlockLdlt {
   int size() const { return n_; }
   /// Blocks stored in L below the diagonal (the fill-in included).
   int off_diagonal_blocks() const { return static_cast<int>(l_row_.size()); }
+  /// Multiply-adds of one factorize (its 3x3 block products, 27 each), from the pattern.
+  double factor_work() const { return factor_work_; }
+  /// Multiply-adds of one solve: each block of L twice and each pivot once, 9 a block.
+  double solve_work() const { return 9.0 * (2.0 * static_cast<double>(l_row_.size()) + n_); }
 
  private:
   using Block = Eigen::Matrix3d;
   int n_ = 0;
+  double factor_work_ = 0.0;
   std::vector<int> perm_;      // perm_[new] = old block index
   std::vector<int> l_start_;   // L by columns (new indices): rows l_row_[l_start_[j]..l_start_[j+1])
   std::vector<int> l_row_;

@@ -98,8 +98,8 @@ struct DynamicsParams {
   double cg_velocity_tolerance = 1e-7;  ///< m/s: absolute floor of the CG stopping test
   int cg_max_iterations = 2000;
   Preconditioner preconditioner = Preconditioner::Auto;
-  int ldlt_max_vertices = 600;     ///< Auto: the largest awake set given the Ldlt preconditioner
-  int refactor_iterations = 8;     ///< Ldlt: a solve taking more iterations refactors for the next one
+  int ldlt_max_vertices = 2500;    ///< Auto: the largest awake set given the Ldlt preconditioner
+  int refactor_iterations = 100;   ///< Ldlt: a solve taking more iterations refactors for the next one (a ceiling: the rent rule refactors sooner)
 
   /// @brief The table of these fields (param_table.hpp): names, bounds, docs.
   static const std::vector<param::Field<DynamicsParams>>& fields();

@@ -36,9 +36,10 @@ double det_dot(const double* a, const double* b, int len, double* partial) {
 // The pattern depends only on the active set: values are refilled in the order the pattern was
 // built, and the symbolic analysis (AMD ordering, elimination tree) is redone only when the
 // active set changes. The numeric factorization is kept over substeps and steps (masses,
-// lengths and contacts change slowly), and over changes of the active set, until a solve needs
-// more than refactor_iterations iterations or the active set has moved too far from the
-// factored one.
+// lengths and contacts change slowly), and over changes of the active set, until the work of
+// the iterations it costs beyond a fresh factor's adds up to the work of a new factorization
+// (rent or buy), a solve needs more than refactor_iterations iterations, or the active set has
+// moved too far from the factored one.
 struct ImplicitSolver::Factor {
   std::vector<int> active;      // the active set the pattern was built for
   std::vector<int> slot;        // per vertex: its position in `active`, -1 if not in it
@@ -52,6 +53,9 @@ struct ImplicitSolver::Factor {
   bool analysed = false;  // ldlt holds the symbolic analysis of `active`
   bool valid = false;     // ldlt holds a numeric factorization of `active`'s system
   bool stale = false;     // the last solve took too many iterations: refactor before the next
+  double iteration_work = 0.0;  // multiply-adds of one iteration: A's product and the factor's solve
+  int fresh_iterations = -1;    // iterations of the first solve after the factorization
+  double rent = 0.0;            // multiply-adds of the iterations beyond those since then
 };
 
 ImplicitSolver::ImplicitSolver(const View& view) : s_(view), factor_(std::make_unique<Factor>()) {}
@@ -198,6 +202,10 @@ void ImplicitSolver::factor_pattern() {
   f.rhs.resize(3 * na);
   f.ldlt.analyze(na, f.blk_start, f.blk_row);
   f.analysed = true;
+  // A's product: a block per spring end and per vertex, 9 multiply-adds each.
+  double a_blocks = na;
+  for (int v : s_.active) a_blocks += s_.incidence.start[v + 1] - s_.incidence.start[v];
+  f.iteration_work = 9.0 * a_blocks + f.ldlt.solve_work();
 }
 
 void ImplicitSolver::factor_fill(double h) {
@@ -247,6 +255,20 @@ void ImplicitSolver::refresh_factor(double h) {
   f.valid = f.ldlt.factorize(f.values.data());
   ++factorizations_;
   f.stale = false;
+  f.fresh_iterations = -1;
+  f.rent = 0.0;
+}
+
+void ImplicitSolver::charge_rent(int iterations) {
+  // Rent or buy: a kept factor costs, at each solve, the iterations it takes beyond what the
+  // fresh factor took; once those add up to one factorization's work, refactoring pays. So a
+  // factor that serves well is kept however long, and one that serves badly is soon replaced,
+  // at most about twice the cheaper of the two. Counted in multiply-adds, not seconds, so that
+  // the choice, and the result, is the same on any machine and thread count.
+  Factor& f = *factor_;
+  if (f.fresh_iterations < 0) f.fresh_iterations = iterations;
+  f.rent += std::max(0, iterations - f.fresh_iterations) * f.iteration_work;
+  if (iterations > s_.p.refactor_iterations || f.rent >= f.ldlt.factor_work()) f.stale = true;
 }
 
 int ImplicitSolver::solve(double h) {
@@ -306,7 +328,7 @@ int ImplicitSolver::solve(double h) {
       parallel_for(0, N, kAxpyCost, [&](long i) { B.p[i] = B.z[i] + beta * B.p[i]; });
     }
   }
-  if (precond_ldlt_ && iterations > s_.p.refactor_iterations) factor_->stale = true;
+  if (precond_ldlt_) charge_rent(iterations);
   return iterations;
 }
 

@@ -81,6 +81,7 @@ class ImplicitSolver {
   struct Factor;
   bool use_ldlt() const;
   void refresh_factor(double h);
+  void charge_rent(int iterations);
   void build_jacobi(double h);
   void factor_pattern();
   void factor_fill(double h);
