@@ -8,7 +8,8 @@ vertices alone, the contact before the samples). The scenes of tests/test_shell_
 - edge: the 0.6 x 0.1 m strip of tests/test_colliders.py over a box's edge (4 cm x 0.67 cm
         cells), the edge between two sample columns, 2 s;
 - carry: a 0.2 m cloth square resting on a box that moves 0.2 m along x in 1 s (set_transform
-        once a frame): how far the sheet went with it;
+        once a frame): how far the sheet went with it; and the same box turning 30 degrees
+        about z in 1 s: how far the sheet turned;
 - cost:  an A4 paper sheet (cells=64, M = 5) burning on a box's top for 8 s: ms per step of the
         whole simulation with and without samples (one run each, timings on a shared machine).
 
@@ -73,6 +74,21 @@ def carried():
     return (sim.vertex_positions().mean(0) - x0)[0]
 
 
+def turned():
+    sim = thinburn.Simulation(*rect_sheet(0.2, 0.2, nx=21, ny=21), cells=16, lattice=6, material="cloth", **QUIET)
+    col = sim.set_colliders(boxes=[dict(centre=(0.1, 0.1, -0.26), half_extents=(0.25, 0.25, 0.25), friction=1.0)])
+    for _ in range(12):
+        sim.step(1 / 24)
+    x0 = sim.vertex_positions()
+    for k in range(24):
+        a = np.radians(30) * (k + 1) / 24
+        col.set_transform(0, (0.1, 0.1, -0.26), [[np.cos(a), -np.sin(a), 0], [np.sin(a), np.cos(a), 0], [0, 0, 1]])
+        sim.step(1 / 24)
+    x1 = sim.vertex_positions()
+    d0, d1 = x0[:, :2] - x0[:, :2].mean(0), x1[:, :2] - x1[:, :2].mean(0)
+    return np.degrees(np.arctan2((d0[:, 0] * d1[:, 1] - d0[:, 1] * d1[:, 0]).sum(), (d0 * d1).sum()))
+
+
 def cost(samples):
     sim = thinburn.Simulation(*rect_sheet(), cells=64, material="paper", **QUIET)
     sim.set_colliders(boxes=[dict(centre=(0.1, 0.15, -0.5), half_extents=(0.5, 0.5, 0.5))], samples=samples)
@@ -90,4 +106,5 @@ if __name__ == "__main__":
             worst, top, wall = penetration(name, samples)
             print(f"{name:>5} {samples:7d} {1e3 * worst:11.2f} {1e3 * top:9.1f} {wall:7.1f}", flush=True)
     print(f"carry: the sheet moved {1e3 * carried():.1f} mm with the box's 200 mm")
+    print(f"turn: the sheet turned {turned():.2f} degrees with the box's 30")
     print(f"cost: burning A4 on a box {cost(0):.2f} ms/step without samples, {cost(4):.2f} with 4")
