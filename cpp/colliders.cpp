@@ -347,4 +347,28 @@ ColliderHit Colliders::query(const Eigen::Vector3d& p) const {
   return best;
 }
 
+void ColliderMotion::update(const Colliders& colliders, double dt) {
+  const int n = colliders.size();
+  before_ = last_;
+  last_.resize(n);
+  moving_.assign(n, 0);
+  dt_ = dt;
+  for (int i = 0; i < n; ++i) {
+    const Pose now{colliders.rotation(i), colliders.translation(i)};
+    // Bitwise comparison: a collider that did not move has exactly zero velocity, so a scene
+    // with still colliders runs as it did before velocities were taken into account.
+    if (i < static_cast<int>(before_.size()))
+      moving_[i] = !(now.R.array() == before_[i].R.array()).all() || !(now.t.array() == before_[i].t.array()).all();
+    last_[i] = now;
+  }
+}
+
+Eigen::Vector3d ColliderMotion::velocity(int i, const Eigen::Vector3d& p) const {
+  if (i < 0 || i >= static_cast<int>(moving_.size()) || !moving_[i]) return Eigen::Vector3d::Zero();
+  // Where the collider's point now at p was one step ago: its local coordinates, then the old pose.
+  const Eigen::Vector3d local = last_[i].R.transpose() * (p - last_[i].t);
+  const Eigen::Vector3d was = before_[i].R * local + before_[i].t;
+  return (p - was) / dt_;
+}
+
 }  // namespace thinburn

@@ -54,6 +54,9 @@ class Colliders {
   ColliderHit query(const Eigen::Vector3d& p) const;
   /// @brief Collider i alone at a world point.
   ColliderHit query_one(int i, const Eigen::Vector3d& p) const;
+  /// @brief Collider i's pose: world = rotation(i) * local + translation(i).
+  const Eigen::Vector3d& translation(int i) const { return shapes_.at(i).t; }
+  const Eigen::Matrix3d& rotation(int i) const { return shapes_.at(i).R; }
   /// @brief Mesh collider i's grid spacing (m, local frame); 0 for a sphere or a box.
   double grid_spacing(int i) const;
   /// @brief "sphere", "box" or "mesh".
@@ -85,6 +88,30 @@ class Colliders {
   std::vector<Shape> shapes_;
   std::vector<Grid> grids_;
   std::uint64_t version_ = 0;
+};
+
+/// @brief The colliders' velocities during a step. A collider is moved by set_transform between
+/// steps (Blender's animation: once a frame); the step that follows reads the pose change as a
+/// rigid motion at constant velocity over its dt, so a contact can take the collider's speed,
+/// not only its position (docs/dynamics.md §3.2).
+class ColliderMotion {
+ public:
+  /// @brief A step of dt starts: each collider's motion since the last call over dt (none for a
+  /// collider this object has not seen before, or whose pose is bitwise the same).
+  void update(const Colliders& colliders, double dt);
+  /// @brief Forget the poses: the next update sees no motion.
+  void clear() { last_.clear(); }
+  /// @brief Velocity (m/s) during this step of the point of collider i at world p.
+  Eigen::Vector3d velocity(int i, const Eigen::Vector3d& p) const;
+
+ private:
+  struct Pose {
+    Eigen::Matrix3d R;
+    Eigen::Vector3d t;
+  };
+  std::vector<Pose> last_, before_;  // the poses at the last update, and at the one before it
+  std::vector<std::uint8_t> moving_;  // per collider: its pose changed at the last update
+  double dt_ = 0.0;
 };
 
 }  // namespace thinburn

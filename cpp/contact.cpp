@@ -19,14 +19,18 @@ double Contacts::floor_at(int v) const {
   return floor_offset_.size() ? s_.p.floor_z + floor_offset_[v] : s_.p.floor_z;
 }
 
-void Contacts::set_colliders(std::shared_ptr<const Colliders> colliders, double margin) {
+void Contacts::set_colliders(std::shared_ptr<const Colliders> colliders, double margin, ContactSamples samples) {
   colliders_ = std::move(colliders);
   collider_margin_ = margin;
   collider_version_ = colliders_ ? colliders_->version() : 0;
+  motion_.clear();
+  shell_ = colliders_ && !samples.empty() ? std::make_unique<ShellContact>(std::move(samples)) : nullptr;
 }
 
-bool Contacts::colliders_moved() {
-  if (!colliders_ || colliders_->version() == collider_version_) return false;
+bool Contacts::colliders_moved(double dt) {
+  if (!colliders_) return false;
+  motion_.update(*colliders_, dt);
+  if (colliders_->version() == collider_version_) return false;
   collider_version_ = colliders_->version();
   return true;
 }
@@ -158,12 +162,12 @@ bool Contacts::collider_contact(const Eigen::Vector3d& x, ColliderHit& hit) cons
   return hit.distance < collider_margin_ + kSlack;
 }
 
-void Contacts::apply_colliders(double h) {
+int Contacts::apply_colliders(double h) {
   // Projection after the substep, as apply_floor does for the floor (docs/dynamics.md §3.2).
   // The substep's solve did not know the collider, so the vertex's couple partner moved with it
   // into the collider; the partner takes the same correction (the couple moves as one), or the
   // top layer would fall through a resting bottom layer by g h^2 every substep.
-  if (!colliders_) return;
+  if (!colliders_) return 0;
   constexpr int kProjections = 3;  // a mesh's field: a second try lands within ~1e-9 m
   RowMatX3& x = s_.lattice.positions();
   RowMatX3& vel = s_.vel;
@@ -184,8 +188,10 @@ void Contacts::apply_colliders(double h) {
       p += (collider_margin_ - hit.distance) * hit.normal;
       hit = colliders_->query(p);
     }
+    // Normal and friction act on the velocity relative to the collider: a moving box lifts and
+    // carries what rests on it (a still one has exactly zero velocity).
     const Eigen::Vector3d n = hit.normal;
-    const Eigen::Vector3d u = vel.row(v).transpose();
+    const Eigen::Vector3d u = vel.row(v).transpose() - motion_.velocity(hit.index, p);
     const double un = u.dot(n);
     const double removed = std::max(0.0, -un);
     const Eigen::Vector3d ut = u - un * n;
@@ -214,6 +220,9 @@ void Contacts::apply_colliders(double h) {
       vel.row(v ^ 1) += dv.row(a);
     }
   }
+  // Then the points of the shell between the control vertices, which a collider smaller than a
+  // control cell passes between (a rod, a table's edge).
+  return shell_ ? shell_->apply(*colliders_, motion_, collider_margin_, h, x, vel, s_.mass, s_.slot) : 0;
 }
 
 int Contacts::contact_substeps(double dt) const {

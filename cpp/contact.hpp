@@ -11,6 +11,7 @@
 
 #include "colliders.hpp"
 #include "lattice.hpp"
+#include "shell_contact.hpp"
 
 namespace thinburn {
 
@@ -37,10 +38,13 @@ class Contacts {
   void set_floor_offsets(const Eigen::VectorXd& offsets) { floor_offset_ = offsets; }
   /// @brief The floor's height under vertex v, m.
   double floor_at(int v) const;
-  /// @brief Collision objects (null: none) and their margin (m, >= 0).
-  void set_colliders(std::shared_ptr<const Colliders> colliders, double margin);
-  /// @brief True once after each change of the colliders' version (a collider moved).
-  bool colliders_moved();
+  /// @brief Collision objects (null: none), their margin (m, >= 0) and the shell's points that
+  /// touch them besides the control vertices (empty: the control vertices only).
+  void set_colliders(std::shared_ptr<const Colliders> colliders, double margin, ContactSamples samples = {});
+  /// @brief A step of dt starts: the colliders' velocities over it (ColliderMotion); true once
+  /// after each change of the colliders' version (a collider moved).
+  bool colliders_moved(double dt);
+
 
   // The implicit solve's filter (Baraff and Witkin's S): a contact's v_z, and a sticking
   // contact's whole velocity, are prescribed; filter() zeroes those components of a 3-vector.
@@ -68,8 +72,9 @@ class Contacts {
   /// @brief After each substep: project the active vertices below the floor onto it, with
   /// Coulomb friction on what the floor removed.
   void apply_floor(double h);
-  /// @brief After each substep: push the active vertices inside a collider's margin out.
-  void apply_colliders(double h);
+  /// @brief After each substep: push the active vertices inside a collider's margin out, then
+  /// the shell's samples; returns the samples pushed.
+  int apply_colliders(double h);
   /// @brief Substeps of a step dt that the vertices nearing a collider need.
   int contact_substeps(double dt) const;
   /// @brief f less what a floor or a collider that vertex v rests on takes of it.
@@ -83,6 +88,8 @@ class Contacts {
   std::shared_ptr<const Colliders> colliders_;  // null: none
   double collider_margin_ = 0.0;
   std::uint64_t collider_version_ = 0;  // colliders_->version() when the sheet last woke for it
+  ColliderMotion motion_;               // the colliders' velocities this step
+  std::unique_ptr<ShellContact> shell_;  // the shell's sample points (null: none)
   RowMatX3 x_contact_, v_contact_;      // apply_colliders' per-active-vertex corrections
   Eigen::VectorXd contact_;         // per vertex: floor impulse per mass of this substep, -1 if free
   std::vector<std::uint8_t> stick_; // per vertex: a contact held by static friction this substep

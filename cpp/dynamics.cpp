@@ -565,7 +565,7 @@ int LatticeDynamics::integrate(double dt, int substeps, StepStats& st) {
       if (p_.strain_limit > 0.0)
         st.strain_limited += strain_limit_->apply(p_.strain_limit, lat_.positions(), vel_, mass_, slot_);
       contacts_.apply_floor(h);
-      contacts_.apply_colliders(h);
+      st.sample_contacts += contacts_.apply_colliders(h);
       if (p_.self_collision)
         self_contact_->apply(self_contact_->separation(p_.self_distance), lat_.positions(), vel_, mass_, slot_);
     }
@@ -790,10 +790,13 @@ void LatticeDynamics::remove_crumple_translation() {
     if (!pinned_[v] && disp_.row(v).squaredNorm() > 0.0) disp_.row(v) -= mean;
 }
 
-void LatticeDynamics::set_colliders(std::shared_ptr<const Colliders> colliders, double margin) {
+void LatticeDynamics::set_colliders(std::shared_ptr<const Colliders> colliders, double margin,
+                                    ContactSamples samples) {
   require(std::isfinite(margin) && margin >= 0.0,
           "collider margin must be finite and >= 0 m, got " + std::to_string(margin));
-  contacts_.set_colliders(std::move(colliders), margin);
+  for (std::size_t i = 0; i < samples.vertex.size(); ++i)
+    require(samples.vertex[i] >= 0 && samples.vertex[i] < n_, "collider samples: vertex index out of range");
+  contacts_.set_colliders(std::move(colliders), margin, std::move(samples));
   sleep_.wake_all();
 }
 
@@ -826,7 +829,7 @@ StepStats LatticeDynamics::step(double dt, const Eigen::VectorXd& D, const Eigen
     forced[v] = disp_.row(v).squaredNorm() > 0.0 || (p_.bimetal && delta_(v / 2) != 0.0) ||
                 std::abs(p_.buoyancy * (heat_(v) - heat_prev_(v))) * dt >= p_.sleep_speed;
   if (bimetal && bimetal_all_) sleep_.wake_all();
-  if (contacts_.colliders_moved()) sleep_.wake_all();
+  if (contacts_.colliders_moved(dt)) sleep_.wake_all();
   if (!p_.sleeping)
     sleep_.wake_all();
   else

@@ -135,6 +135,7 @@ struct StepStats {
   double max_strain = 0;  ///< largest |l / L - 1| of an awake vertex's springs at the step's end
   int stretch_redos = 0;  ///< integrations redone with more substeps because a spring overstretched
   int strain_limited = 0; ///< couple pairs the strain limit put back on its bound, all substeps and passes
+  int sample_contacts = 0; ///< shell samples the colliders pushed out (set_colliders' samples), all substeps and passes
 };
 
 /// @brief Springs, forces and integration of an FfdLattice's control vertices.
@@ -170,9 +171,13 @@ class LatticeDynamics {
   void set_floor_offsets(const Eigen::VectorXd& offsets);
   /// @brief Collision objects (docs/dynamics.md §3.2), kept by pointer (null: none): after every
   /// substep a free control vertex closer than margin (m, >= 0) to one is pushed out to margin
-  /// along its normal, loses its inward normal speed and, by the collider's friction times that
-  /// speed, its tangential speed. Everything wakes now and whenever colliders->version() changes.
-  void set_colliders(std::shared_ptr<const Colliders> colliders, double margin);
+  /// along its normal, loses its inward normal speed relative to the collider and, by the
+  /// collider's friction times that speed, its relative tangential speed; then so is each of
+  /// samples (points of the shell carried by the control vertices; empty: none), by the
+  /// least mass-weighted change of its vertices (shell_contact.hpp). A collider moved between
+  /// steps moves at constant velocity over the next step (ColliderMotion). Everything wakes now
+  /// and whenever colliders->version() changes.
+  void set_colliders(std::shared_ptr<const Colliders> colliders, double margin, ContactSamples samples = {});
   /// @brief Wind velocity, m/s.
   void set_wind(const Eigen::Vector3d& w);
   /// @brief Wind velocity per control vertex ((2 M^2) x 3, m/s), used instead of set_wind's

@@ -8,9 +8,11 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <numeric>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 namespace thinburn {
 namespace {
@@ -338,6 +340,55 @@ RowMatX3 Shell::drape() const {
       rest.row((i * M_ + j) * 2 + 1) = (mid + 0.5 * thickness_ * n).transpose();
     }
   return rest;
+}
+
+void Shell::set_colliders(std::shared_ptr<const Colliders> c, double margin, int samples) {
+  if (samples < 0 || samples > kMaxContactSamples)
+    throw std::invalid_argument("samples must be in [0, " + std::to_string(kMaxContactSamples) +
+                                "] per control cell side, got " + std::to_string(samples));
+  // Built only with colliders: a scene without any pays nothing.
+  ContactSamples s = c && samples > 0 && !control_ ? contact_samples(samples) : ContactSamples{};
+  dynamics_->set_colliders(std::move(c), margin, std::move(s));
+}
+
+ContactSamples Shell::contact_samples(int per_cell) const {
+  // A regular grid of per_cell x per_cell samples a control cell at the sheet's mid-thickness
+  // (r = 1/2, where the mesh lies), through the mesh's own in-plane map (mesh_interp_), so a
+  // sample moves as the mesh there does; kept where the sheet's cell under it is inside (no
+  // contact where there is no sheet). A sample is sum_k w_k x_k over its couples' two layers:
+  // on a flat sheet the lattice rests as an affine grid and both maps reproduce it, so this is
+  // the mesh's rest + displacement form to rounding.
+  const int n = per_cell * (M_ - 1) + 1, N = sheet_->cells();
+  std::map<std::vector<int>, std::vector<std::pair<int, std::vector<double>>>> by_stencil;
+  int stencil = 0;
+  for (int a = 0; a < n; ++a)
+    for (int b = 0; b < n; ++b) {
+      const double st_s = double(a) / per_cell, st_t = double(b) / per_cell;
+      const double u = st_t / (M_ - 1) * sheet_->size_u(), v = st_s / (M_ - 1) * sheet_->size_v();
+      const int col = std::clamp(static_cast<int>(u / sheet_->du()), 0, N - 1);
+      const int row = std::clamp(static_cast<int>(v / sheet_->dv()), 0, N - 1);
+      if (!sheet_->inside()[row * N + col]) continue;
+      int cp[9];
+      double w[9];
+      const int k = lattice_->plane_stencil(st_s, st_t, mesh_interp_, cp, w);
+      stencil = 2 * k;
+      std::vector<int> key(cp, cp + k);
+      std::vector<double> weights;
+      for (int q = 0; q < k; ++q) weights.insert(weights.end(), {0.5 * w[q], 0.5 * w[q]});
+      by_stencil[key].emplace_back(a * n + b, std::move(weights));
+    }
+  ContactSamples out;
+  out.stencil = stencil;
+  out.spacing = std::max(sheet_->size_u(), sheet_->size_v()) / (M_ - 1) / per_cell;
+  out.group.push_back(0);
+  for (const auto& [couples, items] : by_stencil) {
+    for (const auto& item : items) {
+      for (int c : couples) out.vertex.insert(out.vertex.end(), {2 * c, 2 * c + 1});
+      out.weight.insert(out.weight.end(), item.second.begin(), item.second.end());
+    }
+    out.group.push_back(out.size());
+  }
+  return out;
 }
 
 void Shell::cell_couples(int cell, int* couple, double* w) const {

@@ -100,10 +100,12 @@ class Shell {
   void set_dynamics_params(const DynamicsParams& p);
   /// @brief Per-control-vertex wind for the motion (LatticeDynamics::set_wind_field).
   void set_wind_field(const RowMatX3& w) { dynamics_->set_wind_field(w); }
-  /// @brief Collision objects for the motion (LatticeDynamics::set_colliders).
-  void set_colliders(std::shared_ptr<const Colliders> c, double margin) {
-    dynamics_->set_colliders(std::move(c), margin);
-  }
+  /// @brief Collision objects for the motion (LatticeDynamics::set_colliders). samples: contact
+  /// points per control cell side, in [0, kMaxContactSamples] (0: the control vertices only); a
+  /// grid lattice's, on the sheet's mid-surface where the sheet is (contact_samples). A control
+  /// surface's couples touch alone.
+  void set_colliders(std::shared_ptr<const Colliders> c, double margin, int samples = 0);
+  static constexpr int kMaxContactSamples = 16;
 
   const FfdLattice& lattice() const { return *lattice_; }
   const LatticeDynamics& dynamics() const { return *dynamics_; }
@@ -122,6 +124,7 @@ class Shell {
 
  private:
   RowMatX3 drape() const;
+  ContactSamples contact_samples(int per_cell) const;
   void bilinear_couples(double s, double t, int* couple, double* w) const;
   bool rest_is_flat() const;
   template <class F>

@@ -140,11 +140,12 @@ class Simulation {
     if (!shell_) throw std::invalid_argument("set_wind_field: this simulation has no shell");
     shell_->set_wind_field(w);
   }
-  /// @brief Collision objects for the sheet's motion (LatticeDynamics::set_colliders); null:
-  /// none. Needs shell.
-  void set_colliders(std::shared_ptr<const Colliders> c, double margin) {
+  /// @brief Collision objects for the sheet's motion (Shell::set_colliders); null: none.
+  /// samples: contact points of the sheet per control cell side (0: control vertices only).
+  /// Needs shell.
+  void set_colliders(std::shared_ptr<const Colliders> c, double margin, int samples = 0) {
     if (!shell_) throw std::invalid_argument("set_colliders: this simulation has no shell");
-    shell_->set_colliders(std::move(c), margin);
+    shell_->set_colliders(std::move(c), margin, samples);
   }
   const Eigen::Vector3d& wind() const { return wind_; }
 

@@ -57,6 +57,7 @@ void define_dynamics(py::module_& m) {
       .def_readonly("max_strain", &StepStats::max_strain, "Largest |l/L - 1| of an awake vertex's springs at the end.")
       .def_readonly("stretch_redos", &StepStats::stretch_redos, "Integrations redone with more substeps for an overstretched spring.")
       .def_readonly("strain_limited", &StepStats::strain_limited, "Couple pairs put back on the strain limit, all substeps and passes.")
+      .def_readonly("sample_contacts", &StepStats::sample_contacts, "Shell samples the colliders pushed out, all substeps and passes.")
       .def_readonly("passes", &StepStats::passes)
       .def("__repr__", [](const StepStats& s) {
         return "StepStats(substeps=" + std::to_string(s.substeps) + ", awake=" +

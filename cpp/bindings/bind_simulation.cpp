@@ -109,8 +109,10 @@ void define_simulation(py::module_& m) {
       .def_property("wind", &S::wind, &S::set_wind)
       .def("set_wind_field", &S::set_wind_field, py::arg("wind"))
       .def("set_colliders",
-           [](S& s, std::shared_ptr<Colliders> c, double margin) { s.set_colliders(std::move(c), margin); },
-           py::arg("colliders").none(true), py::arg("margin"))
+           [](S& s, std::shared_ptr<Colliders> c, double margin, int samples) {
+             s.set_colliders(std::move(c), margin, samples);
+           },
+           py::arg("colliders").none(true), py::arg("margin"), py::arg("samples") = 0)
       .def_property_readonly("geometry", [](const S& s) { return geometry_name(s.geometry()); })
       .def_property_readonly("cells", [](const S& s) { return s.geometry() == Geometry::Plane ? s.sheet().cells() : s.params().cells; })
       .def_property_readonly("num_cells", &S::num_cells)
@@ -230,7 +232,8 @@ void define_simulation(py::module_& m) {
                         py::arg("cg_iterations") = t.cg_iterations, py::arg("omega_max") = t.omega_max,
                         py::arg("passes") = t.passes, py::arg("factorizations") = t.factorizations,
                         py::arg("max_strain") = t.max_strain, py::arg("stretch_redos") = t.stretch_redos,
-                        py::arg("strain_limited") = t.strain_limited);
+                        py::arg("strain_limited") = t.strain_limited,
+                        py::arg("sample_contacts") = t.sample_contacts);
       })
       .def("frame", [](const S& s) {
         const SheetFrame& f = s.sheet().frame();

@@ -8,7 +8,9 @@ required, and cheap: one pass over the triangles, against a winding number's eve
 every triangle). Queries interpolate the grid trilinearly. See docs/dynamics.md §3.2.
 
 Every collider has a pose (world = rotation @ local + translation) that may change between
-steps (``set_transform``): a moving collider wakes a sleeping sheet.
+steps (``set_transform``): a moving collider wakes a sleeping sheet, and the move is its
+velocity over the next step (the contact acts on the sheet's speed relative to it, so a moving
+box carries what rests on it).
 """
 from __future__ import annotations
 

@@ -34,6 +34,7 @@ MAX_LATTICE = int(FIELDS["simulation"]["lattice"].high)  # 129
 # Wind, m/s: 1e10 still gives finite results, 1e150 fails inside a step (particle normals
 # overflow) and 1e300 silently does nothing; no real wind comes near 1000 m/s.
 MAX_WIND = 1e3
+MAX_CONTACT_SAMPLES = 16  # per control cell side (cpp/shell.hpp kMaxContactSamples)
 # Simulation.run: duration / dt beyond this many steps (hours even at a millisecond a step)
 # is refused rather than looping for ever (run(1e300) did).
 MAX_RUN_STEPS = 10_000_000
@@ -392,16 +393,21 @@ class Simulation:
             raise ValueError(f"wind field: |wind| = {fastest:.3g} m/s exceeds {MAX_WIND:g} m/s")
         self._sim.set_wind_field(np.ascontiguousarray(w))
 
-    def set_colliders(self, colliders=None, *, spheres=(), boxes=(), meshes=(), margin=None):
+    def set_colliders(self, colliders=None, *, spheres=(), boxes=(), meshes=(), margin=None, samples=4):
         """Collision objects the sheet rests on or drapes over (docs/dynamics.md §3.2): a
         ``thinburn.colliders.Colliders``, or ``spheres``/``boxes``/``meshes`` lists of dicts
         that build one (see ``Colliders``); None and no lists: none. After every substep a
         lattice control vertex closer than ``margin`` (m; None: half ``lattice_thickness``, so
         that the fine mesh between couples keeps clear of a curved collider) is pushed out
-        along the collider's normal, loses its inward speed, and Coulomb friction (each
-        collider's ``friction`` times that speed) slows it along the surface. Returns the
-        Colliders in force: move one with ``set_transform`` between steps (the sheet wakes).
-        Mutating it from another thread during a step is not supported."""
+        along the collider's normal, loses its inward speed relative to the collider, and
+        Coulomb friction (each collider's ``friction`` times that speed) slows it along the
+        surface; then so is each of ``samples`` x ``samples`` points of the sheet's mid-surface
+        per control cell (a flat sheet's lattice; 0: the control vertices only), so a collider
+        narrower than a control cell (a rod, a table's edge) does not pass between couples.
+        Returns the Colliders in force: move one with ``set_transform`` between steps (the
+        sheet wakes, and the move is the collider's velocity over the next step, so a moving
+        box carries what rests on it). Mutating it from another thread during a step is not
+        supported."""
         self._require_shell("set_colliders")
         if colliders is not None and (spheres or boxes or meshes):
             raise TypeError("set_colliders: pass either colliders or spheres/boxes/meshes, not both")
@@ -411,7 +417,8 @@ class Simulation:
             raise TypeError(f"colliders must be a thinburn.colliders.Colliders or None, "
                             f"got {type(colliders).__name__}")
         m = 0.5 * self.lattice_thickness if margin is None else V.real(margin, "margin", low=0.0)
-        self._sim.set_colliders(None if colliders is None else colliders._core, m)
+        n = V.integer(samples, "samples", low=0, high=MAX_CONTACT_SAMPLES)
+        self._sim.set_colliders(None if colliders is None else colliders._core, m, n)
         self._colliders = colliders
         return colliders
 

@@ -1,0 +1,96 @@
+#include "shell_contact.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <utility>
+
+namespace thinburn {
+namespace {
+
+// A group is skipped when the collider's distance at the centre of its vertices' box exceeds
+// the margin by this many half-diagonals. Exact distances change by at most 1 per metre; a mesh
+// field read outside its grid (distance to the grid's box plus the border's value) over-reads by
+// up to sqrt(2) of that (the border point is a projection onto a convex box), hence 1.5.
+constexpr double kLipschitz = 1.5;
+
+}  // namespace
+
+ShellContact::ShellContact(ContactSamples samples) : s_(std::move(samples)) { share_.resize(s_.stencil); }
+
+bool ShellContact::group_may_touch(int g, const Colliders& colliders, double margin, const RowMatX3& x,
+                                   const std::vector<int>& slot) const {
+  // A sample lies in the convex hull of its vertices (weights >= 0, summing to 1): if the
+  // collider is farther than the margin from the whole box of the group's vertices, no sample
+  // of the group touches it. Groups all of whose vertices sleep or are pinned cannot move.
+  const int* v = s_.vertex.data() + std::size_t(s_.group[g]) * s_.stencil;
+  bool awake = false;
+  Eigen::Vector3d lo = x.row(v[0]).transpose(), hi = lo;
+  for (int k = 0; k < s_.stencil; ++k) {
+    awake |= slot[v[k]] >= 0;
+    lo = lo.cwiseMin(x.row(v[k]).transpose());
+    hi = hi.cwiseMax(x.row(v[k]).transpose());
+  }
+  if (!awake) return false;
+  const ColliderHit hit = colliders.query(0.5 * (lo + hi));
+  return hit.distance < margin + kLipschitz * 0.5 * (hi - lo).norm();
+}
+
+bool ShellContact::push_out(int s, const Colliders& colliders, const ColliderMotion& motion, double margin,
+                            double h, RowMatX3& x, RowMatX3& vel, const Eigen::VectorXd& mass,
+                            const std::vector<int>& slot) {
+  const int K = s_.stencil;
+  const int* v = s_.vertex.data() + std::size_t(s) * K;
+  const double* w = s_.weight.data() + std::size_t(s) * K;
+  Eigen::Vector3d p = Eigen::Vector3d::Zero(), u = Eigen::Vector3d::Zero();
+  for (int k = 0; k < K; ++k) {
+    p += w[k] * x.row(v[k]).transpose();
+    u += w[k] * vel.row(v[k]).transpose();
+  }
+  const ColliderHit hit = colliders.query(p);
+  if (!(hit.distance < margin)) return false;
+  // The least change of the vertices, in the mass metric sum m_k |dx_k|^2, that moves the sample
+  // p = sum w_k x_k by dp: dx_k = w_k m_k^-1 dp / sum_j w_j^2 m_j^-1 (a Lagrange multiplier on
+  // sum w_k dx_k = dp). The same for the velocity is an impulse J = dp / sum w_j^2 m_j^-1 at the
+  // sample, shared out as w_k J (momentum changes by J exactly: the weights sum to 1).
+  double W = 0.0;
+  for (int k = 0; k < K; ++k) {
+    share_[k] = slot[v[k]] >= 0 ? w[k] / mass(v[k]) : 0.0;  // sleeping and pinned vertices do not move
+    W += w[k] * share_[k];
+  }
+  if (!(W > 0.0)) return false;
+  // Inelastic and Coulomb, as a control vertex's contact (Contacts::apply_colliders), on the
+  // sample's velocity relative to the collider.
+  const Eigen::Vector3d n = hit.normal;
+  u -= motion.velocity(hit.index, p);
+  const double un = u.dot(n);
+  const double removed = std::max(0.0, -un);
+  const Eigen::Vector3d ut = u - un * n;
+  const double t = ut.norm();
+  const double keep = t > hit.friction * removed ? (t - hit.friction * removed) / t : 0.0;
+  const Eigen::Vector3d dp = (margin - hit.distance) * n - h * (1.0 - keep) * ut;
+  const Eigen::Vector3d du = std::max(un, 0.0) * n + keep * ut - u;
+  for (int k = 0; k < K; ++k) {
+    if (share_[k] == 0.0) continue;
+    const double f = share_[k] / W;
+    x.row(v[k]) += f * dp.transpose();
+    vel.row(v[k]) += f * du.transpose();
+  }
+  return true;
+}
+
+int ShellContact::apply(const Colliders& colliders, const ColliderMotion& motion, double margin, double h,
+                        RowMatX3& x, RowMatX3& vel, const Eigen::VectorXd& mass, const std::vector<int>& slot) {
+  // Serial, in sample order (Gauss-Seidel): samples share vertices, and each one's correction
+  // sees its neighbours' (Jacobi, each sample's own correction summed, would move a cell lying
+  // on a face by about as many depths as it has samples in contact).
+  int moved = 0;
+  const int groups = static_cast<int>(s_.group.size()) - 1;
+  for (int g = 0; g < groups; ++g) {
+    if (!group_may_touch(g, colliders, margin, x, slot)) continue;
+    for (int s = s_.group[g]; s < s_.group[g + 1]; ++s)
+      moved += push_out(s, colliders, motion, margin, h, x, vel, mass, slot);
+  }
+  return moved;
+}
+
+}  // namespace thinburn

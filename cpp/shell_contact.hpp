@@ -1,0 +1,51 @@
+#pragma once
+/// @brief Contact of the embedded shell with the colliders (docs/dynamics.md §3.2): points of the
+/// sheet between the control vertices, each carried by a fixed set of them, that a collider
+/// smaller than a control cell (a rod, a table's edge, a small ball) would pass between
+/// otherwise. After each substep a sample inside the margin is moved out along the collider's
+/// normal by the smallest mass-weighted change of the control vertices that carry it.
+#include <Eigen/Core>
+
+#include <vector>
+
+#include "colliders.hpp"
+#include "lattice.hpp"
+
+namespace thinburn {
+
+/// @brief The sample points: sample s is at sum_k weight[s, k] * x(vertex[s, k]).
+struct ContactSamples {
+  int stencil = 0;             ///< control vertices per sample
+  std::vector<int> vertex;     ///< size() * stencil control vertex indices
+  std::vector<double> weight;  ///< size() * stencil weights, >= 0, each sample's sum to 1
+  /// Samples [group[g], group[g + 1]) have the same vertices (a control cell's stencil): the
+  /// convex hull of those vertices holds them all, so one query tells whether any can touch.
+  std::vector<int> group;
+  double spacing = 0.0;        ///< m between neighbouring samples at rest (the finest feature caught)
+  int size() const { return stencil ? static_cast<int>(vertex.size()) / stencil : 0; }
+  bool empty() const { return size() == 0; }
+};
+
+class ShellContact {
+ public:
+  explicit ShellContact(ContactSamples samples);
+  const ContactSamples& samples() const { return s_; }
+
+  /// @brief After a substep h (after the control vertices' own contacts): each sample closer than
+  /// margin to a collider moves out to it along the normal, loses its inward normal speed
+  /// relative to the collider and, by the collider's friction times that, its tangential one.
+  /// Only the vertices with slot[v] >= 0 (integrated this step) move. Returns the samples moved.
+  int apply(const Colliders& colliders, const ColliderMotion& motion, double margin, double h,
+            RowMatX3& x, RowMatX3& vel, const Eigen::VectorXd& mass, const std::vector<int>& slot);
+
+ private:
+  bool group_may_touch(int g, const Colliders& colliders, double margin, const RowMatX3& x,
+                       const std::vector<int>& slot) const;
+  bool push_out(int s, const Colliders& colliders, const ColliderMotion& motion, double margin, double h,
+                RowMatX3& x, RowMatX3& vel, const Eigen::VectorXd& mass, const std::vector<int>& slot);
+
+  ContactSamples s_;
+  std::vector<double> share_;  // scratch: per stencil vertex, w m^-1 / sum w^2 m^-1
+};
+
+}  // namespace thinburn
