@@ -18,6 +18,9 @@ constexpr double kParamSlack = 1e-9;
 // vertices deform on one thread.
 constexpr Eigen::Index kDeformBlock = 1024;
 constexpr long kPointCost = 1;
+// The kept points' copy out goes in blocks of 64k rows (1.5 MB), each far above the pool's
+// threshold: a mesh of a single block stays on the calling thread.
+constexpr Eigen::Index kCopyBlock = 1 << 16;
 
 // Weights of one lattice axis at coordinate x over the three nodes base, base+1, base+2
 // (base + 2 may be unused: weight 0). Linear: two nodes.
@@ -309,10 +312,15 @@ void CachedDeform::deform_into(const FfdLattice& lattice, const Embedding& e, do
       keep_moved_couples(table);
     }
     positions_valid_ = true;
-    // One memcpy where out's rows are packed (numpy's C order): Eigen's copy into a Ref with a
-    // run-time stride went row by row, 10 % of a film frame.
+    // memcpy where out's rows are packed (numpy's C order): Eigen's copy into a Ref with a
+    // run-time stride went row by row, 10 % of a film frame. In blocks over the threads: one
+    // thread's copy of the film's 24 MB was most of a frame that redoes few vertices.
     if (out.outerStride() == 3) {
-      std::memcpy(out.data(), positions_.data(), sizeof(double) * 3 * std::size_t(points_));
+      const long blocks = static_cast<long>((points_ + kCopyBlock - 1) / kCopyBlock);
+      parallel_for(0, blocks, kCopyBlock * kPointCost, [&](long b) {
+        const Eigen::Index lo = b * kCopyBlock, rows = std::min<Eigen::Index>(points_ - lo, kCopyBlock);
+        std::memcpy(out.data() + 3 * lo, positions_.data() + 3 * lo, sizeof(double) * 3 * std::size_t(rows));
+      });
     } else {
       out = positions_;
     }
