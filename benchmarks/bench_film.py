@@ -79,19 +79,23 @@ class ReusedOutput:
         return getattr(self.sim, name)
 
 
-def profile(sim, frames: int, dt: float = DT) -> dict:
-    """Mean ms per frame of each phase (Simulation.phase_seconds), over `frames` more frames."""
+def profile(sim, frames: int, dt: float = DT) -> tuple:
+    """Mean ms per frame of each phase (Simulation.phase_seconds), over `frames` more frames,
+    and the mean of mesh_points_redone over them (None without it)."""
     sim.step(dt)
     before = sim.phase_seconds()
+    redone = []
     t0 = time.perf_counter()
     for _ in range(frames):
         sim.step(dt)
         sim.vertex_positions()
+        redone.append(getattr(sim, "mesh_points_redone", None))
     wall = time.perf_counter() - t0
     after = sim.phase_seconds()
     out = {k: 1e3 * (after[k] - before[k]) / frames for k in after}
     out["frame (wall)"] = 1e3 * wall / frames
-    return out
+    mean_redone = None if None in redone else float(np.mean(redone))
+    return out, mean_redone
 
 
 def measure(verts, faces, args, start: float, log) -> list:
@@ -107,15 +111,17 @@ def measure(verts, faces, args, start: float, log) -> list:
         r = dict(variant=variant, threads=t, start_seconds=start, cells=args.cells, vertices=len(verts),
                  lattice=sim.lattice_size, reuse_output=args.reuse_output, load_before=load0,
                  load_after=load1, **frame_summary(step_ms, pos_ms, stats))
-        r["profile_ms"] = profile(sim, args.profile_frames) if hasattr(sim, "phase_seconds") else {}
-        r["mesh_points_redone"] = getattr(sim, "mesh_points_redone", None)
+        r["profile_ms"], r["mesh_points_redone_mean"] = (
+            profile(sim, args.profile_frames) if hasattr(sim, "phase_seconds") else ({}, None))
+        r["mesh_points_redone"] = getattr(sim, "mesh_points_redone", None)  # the last frame's
         rows.append(r)
         log(f"start={start:5.1f} s {variant} threads={t}  {r['frames_per_second']:6.1f} frames/s  "
             f"{r['ms_per_frame']:7.2f} ms/frame (vertex_positions {r['positions_ms']:.2f} ms)  "
             f"awake={r['awake']:.0f} burning={r['burning']:.0f} cg={r['cg_iterations']:.0f}  "
             f"load {load0[0]:.2f} -> {load1[0]:.2f}")
         log("    " + "  ".join(f"{k} {v:.2f}" for k, v in r["profile_ms"].items())
-            + f"  (mesh vertices redone {r['mesh_points_redone']})")
+            + f"  (mesh vertices redone {r['mesh_points_redone_mean']} a frame, "
+              f"{r['mesh_points_redone']} the last)")
     return rows
 
 

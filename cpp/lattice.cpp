@@ -18,6 +18,9 @@ constexpr double kParamSlack = 1e-9;
 // vertices deform on one thread.
 constexpr Eigen::Index kDeformBlock = 1024;
 constexpr long kPointCost = 1;
+// The kept points' copy out goes in blocks of 64k rows (1.5 MB), each far above the pool's
+// threshold: a mesh of a single block stays on the calling thread.
+constexpr Eigen::Index kCopyBlock = 1 << 16;
 
 // Weights of one lattice axis at coordinate x over the three nodes base, base+1, base+2
 // (base + 2 may be unused: weight 0). Linear: two nodes.
@@ -240,7 +243,10 @@ void FfdLattice::displacement_table(std::vector<double>& table) const {
   }
 }
 
-CachedDeform::CachedDeform(const Embedding& e, int couples) : points_(e.size()), moved_(couples, 0) {
+CachedDeform::CachedDeform(const Embedding& e, int couples, double tolerance)
+    : points_(e.size()), tolerance_(tolerance), moved_(couples, 0) {
+  if (!std::isfinite(tolerance) || tolerance < 0.0)
+    throw std::invalid_argument("CachedDeform: tolerance must be finite and >= 0, got " + std::to_string(tolerance));
   // Points grouped by their stencil's first couple: every point of a group reads the same
   // couples (a grid stencil is fixed by its first), so one moved couple redoes only the points
   // around it, not whole rows of the mesh.
@@ -286,11 +292,13 @@ void CachedDeform::deform_into(const FfdLattice& lattice, const Embedding& e, do
     // (no copy; the groups' order jumps between rows). The kept positions go stale.
     deform_all(e, table.data(), couples, z_min, out);
     positions_valid_ = false;
+    kept_.swap(table);  // every point now reads this table
   } else {
     positions_.resize(points_, 3);
     Eigen::Ref<RowMatX3> kept(positions_);
     if (!positions_valid_) {
       deform_all(e, table.data(), couples, z_min, kept);
+      kept_.swap(table);
     } else {
       redone_ = points;
       const double* tab = table.data();  // the caller's: table is thread_local, the helpers' own are empty
@@ -301,25 +309,42 @@ void CachedDeform::deform_into(const FfdLattice& lattice, const Embedding& e, do
         if (stencil_ == 4) deform_range<4>(e, tab, couples, kept, z_min, group_offset_[g], group_offset_[g + 1], group_points_.data());
         else deform_range<9>(e, tab, couples, kept, z_min, group_offset_[g], group_offset_[g + 1], group_points_.data());
       });
+      keep_moved_couples(table);
     }
     positions_valid_ = true;
-    // One memcpy where out's rows are packed (numpy's C order): Eigen's copy into a Ref with a
-    // run-time stride went row by row, 10 % of a film frame.
+    // memcpy where out's rows are packed (numpy's C order): Eigen's copy into a Ref with a
+    // run-time stride went row by row, 10 % of a film frame. In blocks over the threads: one
+    // thread's copy of the film's 24 MB was most of a frame that redoes few vertices.
     if (out.outerStride() == 3) {
-      std::memcpy(out.data(), positions_.data(), sizeof(double) * 3 * std::size_t(points_));
+      const long blocks = static_cast<long>((points_ + kCopyBlock - 1) / kCopyBlock);
+      parallel_for(0, blocks, kCopyBlock * kPointCost, [&](long b) {
+        const Eigen::Index lo = b * kCopyBlock, rows = std::min<Eigen::Index>(points_ - lo, kCopyBlock);
+        std::memcpy(out.data() + 3 * lo, positions_.data() + 3 * lo, sizeof(double) * 3 * std::size_t(rows));
+      });
     } else {
       out = positions_;
     }
   }
-  table_.swap(table);
   z_min_ = z_min;
-  table_valid_ = true;
+  kept_valid_ = true;
 }
 
+// Why every point stays within 2 tol of the full deform (each coordinate, tol = tolerance_).
+// Take a group g this call does not redo, last computed from an earlier call's table T'; K_c
+// is the kept rows of a couple c of its stencil. (a) When g was computed, c either moved (then
+// K_c = T'_c) or not (|T'_c - K_c| <= tol entrywise). (b) K_c has not changed since: it
+// changes only when c moves, and that redoes every group reading c, g among them. (c) c has not
+// moved now: |T_c - K_c| <= tol. So |T_c - T'_c| <= 2 tol in every entry. A point's coordinate
+// is rest + sum_q w_q ((1 - r) d_bottom + r d_top), r in [0, 1]: it is off by at most
+// 2 tol sum_q |w_q|. The grid embeddings' weights are products of axis weights >= 0 that sum
+// to 1 (linear_axis; bspline_axis's end ghosts keep them >= 0), so 2 tol, up to the rounding
+// of the two sums (ulps of the coordinates). The floor's max(z, z_min) moves no value farther
+// apart, and a new z_min redoes every point. tol = 0 is the bitwise comparison: an unmoved
+// couple's entries equal the kept ones bit for bit, and so the points are the full deform's.
 long CachedDeform::moved_points(const std::vector<double>& table, double z_min) {
-  const bool all = !table_valid_ || z_min != z_min_;
+  const bool all = !kept_valid_ || z_min != z_min_;
   for (std::size_t c = 0; c < moved_.size(); ++c)
-    moved_[c] = all || std::memcmp(&table[8 * c], &table_[8 * c], 8 * sizeof(double)) != 0;
+    moved_[c] = all || couple_moved(&table[8 * c], &kept_[8 * c]);
   dirty_.clear();
   long points = 0;
   for (long g = 0; g < groups(); ++g)
@@ -330,6 +355,22 @@ long CachedDeform::moved_points(const std::vector<double>& table, double z_min) 
         break;
       }
   return points;
+}
+
+bool CachedDeform::couple_moved(const double* now, const double* kept) const {
+  // Bitwise at 0, so the cache stays exact whatever the values (-0.0, a NaN kept as it was).
+  if (tolerance_ == 0.0) return std::memcmp(now, kept, 8 * sizeof(double)) != 0;
+  // "Not within": a NaN or an infinite displacement counts as moved.
+  for (int k = 0; k < 8; ++k)
+    if (!(std::fabs(now[k] - kept[k]) <= tolerance_)) return true;
+  return false;
+}
+
+// After a partial redo: only the moved couples take the new rows. An unmoved couple keeps the
+// rows of its last redo, so a drift below the tolerance each call still adds up to a redo.
+void CachedDeform::keep_moved_couples(const std::vector<double>& table) {
+  for (std::size_t c = 0; c < moved_.size(); ++c)
+    if (moved_[c]) std::memcpy(&kept_[8 * c], &table[8 * c], 8 * sizeof(double));
 }
 
 void CachedDeform::deform_all(const Embedding& e, const double* table, int couples, double z_min, Eigen::Ref<RowMatX3> out) {

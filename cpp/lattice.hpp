@@ -38,19 +38,24 @@ struct Embedding {
 class FfdLattice;
 
 /// @brief The deformed positions of one embedding, kept from call to call. A call redoes only
-/// the points one of whose couples moved since the last call (bitwise: a sleeping couple keeps
-/// its points as they were), with FfdLattice::deform's kernel on the same displacement table,
-/// so the positions are bit-identical to a full deform. The points are grouped by stencil (all
-/// the points of a control cell read the same couples), so a moving region redoes its own
-/// points only. When more than half of them moved, a call deforms every point straight into
-/// the caller's rows, as FfdLattice::deform (no copy), and the next call with fewer moved
-/// deforms every point once more to keep them. One call at a time (a mutex).
+/// the points one of whose couples moved, with FfdLattice::deform's kernel on the same
+/// displacement table. A couple has moved when an entry of its table rows differs from the
+/// value kept for it at its last redo by more than the tolerance (tolerance 0: bitwise, so a
+/// sleeping couple keeps its points as they were and the positions are bit-identical to a full
+/// deform). Kept per couple, not the last call's table: a slow creep adds up until it counts.
+/// With a tolerance every point is within 2 x tolerance (each coordinate) of the full deform
+/// (the proof is at moved_points, lattice.cpp). The points are grouped by stencil (all the
+/// points of a control cell read the same couples), so a moving region redoes its own points
+/// only. When more than half of them moved, a call deforms every point straight into the
+/// caller's rows, as FfdLattice::deform (no copy), and the next call with fewer moved deforms
+/// every point once more to keep them. One call at a time (a mutex).
 class CachedDeform {
  public:
   CachedDeform() = default;
   /// @brief For points embedded in a lattice of `couples` couples (the embedding is not kept:
-  /// each call takes it again, and it must be the same one).
-  CachedDeform(const Embedding& e, int couples);
+  /// each call takes it again, and it must be the same one). tolerance: m a couple's
+  /// displacement may drift from its last redo before its points are redone (>= 0, finite).
+  CachedDeform(const Embedding& e, int couples, double tolerance = 0.0);
   /// @brief The points deformed by the lattice's control positions now, into out (n x 3);
   /// z_min as FfdLattice::deform (a change redoes every point).
   void deform_into(const FfdLattice& lattice, const Embedding& e, double z_min, Eigen::Ref<RowMatX3> out);
@@ -58,21 +63,26 @@ class CachedDeform {
   long points_redone() const { return redone_; }
   /// @brief Groups of points that share a stencil.
   long groups() const { return static_cast<long>(group_offset_.size()) - 1; }
+  /// @brief m, the drift of a couple's displacement that redoes its points.
+  double tolerance() const { return tolerance_; }
 
  private:
   long moved_points(const std::vector<double>& table, double z_min);  // fills moved_, dirty_
+  bool couple_moved(const double* now, const double* kept) const;
+  void keep_moved_couples(const std::vector<double>& table);
   void deform_all(const Embedding& e, const double* table, int couples, double z_min, Eigen::Ref<RowMatX3> out);
   Eigen::Index points_ = 0;
   int stencil_ = 0;
+  double tolerance_ = 0.0;
   std::vector<int> group_offset_;            // group g: group_points_[group_offset_[g] .. [g + 1])
   std::vector<std::int32_t> group_points_;   // point indices, grouped
   std::vector<int> group_couples_;           // per group its stencil's couples
-  std::vector<double> table_;                // the displacement table of the last call
+  std::vector<double> kept_;                 // per couple, its displacement-table rows at its last redo
   std::vector<std::uint8_t> moved_;          // per couple, scratch
   std::vector<long> dirty_;                  // groups to redo, scratch
-  RowMatX3 positions_;                       // the points as of table_ (when positions_valid_)
+  RowMatX3 positions_;                       // the points as of kept_ (when positions_valid_)
   double z_min_ = 0.0;
-  bool table_valid_ = false, positions_valid_ = false;
+  bool kept_valid_ = false, positions_valid_ = false;
   long redone_ = 0;
   std::mutex mutex_;
 };

@@ -46,6 +46,8 @@ const std::vector<param::Field<ShellParams>>& ShellParams::fields() {
       field("has_floor", &P::has_floor, "a horizontal floor under the sheet"),
       field("floor_z", &P::floor_z, "m: the floor's height"),
       field("ash_strength", &P::ash_strength, within(0, 1), "share of the springs' stiffness burnt sheet keeps"),
+      field("mesh_tolerance", &P::mesh_tolerance, within(0, 1),
+            "share of the sheet's size a couple drifts before its mesh vertices are redone (0: exact)"),
       field("seed", &P::seed, "seeds the particles' random stream"),
   };
   return table;
@@ -85,7 +87,10 @@ Shell::Shell(const Sheet& sheet, const ShellParams& params, const std::vector<do
   // and it would round the fold off (its edges shrank to 0.76 in a free fall).
   mesh_interp_ = rest_is_flat() ? LatticeInterp::QuadraticBSpline : LatticeInterp::Trilinear;
   vertex_embedding_ = lattice_->embed(coords, sheet.vertices(), mesh_interp_);
-  mesh_deform_ = std::make_unique<CachedDeform>(vertex_embedding_, lattice_->couples());
+  // Relative to the sheet, not in metres: what a picture of it can show scales with its size
+  // (a camera frames the sheet), and the model takes sheets from micrometres to kilometres.
+  const double mesh_tol = params_.mesh_tolerance * std::max(sheet.size_u(), sheet.size_v());
+  mesh_deform_ = std::make_unique<CachedDeform>(vertex_embedding_, lattice_->couples(), mesh_tol);
   cell_area_.assign(N * N, sheet.du() * sheet.dv());
   // Eq 3 sums over the ignition points, the burning cells: the same fire at twice the grid
   // resolution has four times the points. Each cell counts as its share of a cell of the

@@ -24,6 +24,12 @@
 
 namespace thinburn {
 
+/// Share of the sheet's size a couple may drift before the mesh's vertices it carries are redone
+/// (CachedDeform's tolerance over the sheet's larger side): a vertex then lags its exact place
+/// by at most twice that, 2 um on a 1 m sheet, far below a pixel (docs/lattice.md, "The mesh's
+/// tolerance").
+constexpr double kDefaultMeshTolerance = 1e-6;
+
 /// @brief What the shell needs of the simulation's parameters.
 struct ShellParams {
   int lattice = 0;               ///< M couples per side; 0 chooses from the sheet's size and N
@@ -31,6 +37,7 @@ struct ShellParams {
   bool has_floor = false;
   double floor_z = 0.0;
   double ash_strength = 0.1;     ///< share of the springs' stiffness burnt sheet keeps
+  double mesh_tolerance = kDefaultMeshTolerance;  ///< of the sheet's size; 0: the mesh is exact
   std::uint64_t seed = 0;
   DynamicsParams dynamics;
   ParticleParams particles;

@@ -89,6 +89,8 @@ const std::vector<param::Field<SimulationParams>>& SimulationParams::fields() {
       field("lattice_thickness", &P::lattice_thickness, at_least(0), "m between a couple's two vertices (0: chosen)"),
       field("has_floor", &P::has_floor, "a horizontal floor (a table) under the sheet"),
       field("floor_z", &P::floor_z, "m: the floor's height"),
+      field("mesh_tolerance", &P::mesh_tolerance, within(0, 1),
+            "share of the sheet's size a couple drifts before its mesh vertices are redone (0: exact)"),
   };
   return table;
 }
@@ -375,6 +377,7 @@ ShellParams Simulation::shell_params() const {
   sp.has_floor = params_.has_floor;
   sp.floor_z = params_.floor_z;
   sp.ash_strength = params_.ash_strength;
+  sp.mesh_tolerance = params_.mesh_tolerance;
   sp.seed = params_.seed;
   sp.dynamics = params_.dynamics;
   sp.particles = params_.particles;

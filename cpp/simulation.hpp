@@ -69,6 +69,9 @@ struct SimulationParams {
   double lattice_thickness = 0;  ///< m between a couple's two vertices; 0 chooses
   bool has_floor = false;        ///< a horizontal floor (a table) under the sheet
   double floor_z = 0.0;          ///< m, its height
+  /// Share of the sheet's size a couple drifts before the mesh vertices it carries are redone;
+  /// each vertex is then within twice that of its exact place (0: exact, bit for bit).
+  double mesh_tolerance = kDefaultMeshTolerance;
   DynamicsParams dynamics;
   ParticleParams particles;
   BendingParams bending;

@@ -2,6 +2,7 @@
 #include <pybind11/numpy.h>
 #include <pybind11/stl.h>
 
+#include <limits>
 #include <string>
 
 #include "bindings.hpp"
@@ -124,6 +125,26 @@ void define_lattice(py::module_& m) {
             return self.index(i, j, k);
           },
           "i"_a, "j"_a, "k"_a, "Index of control vertex (i, j, k).");
+
+  // The Shell's mesh cache on its own, for tests of its tolerance on lattices moved by hand.
+  py::class_<CachedDeform>(m, "CachedDeform",
+                           "An embedding's deformed points kept from call to call: a call redoes "
+                           "those whose couples drifted by more than tolerance (m) since their "
+                           "last redo (0: bitwise, the result is FfdLattice.deform's).")
+      .def(py::init<const Embedding&, int, double>(), "embedding"_a, "couples"_a, "tolerance"_a = 0.0)
+      .def(
+          "deform",
+          [](CachedDeform& self, const FfdLattice& lattice, const Embedding& e, double z_min) {
+            RowMatX3 out(e.size(), 3);
+            py::gil_scoped_release release;
+            self.deform_into(lattice, e, z_min, out);
+            return out;
+          },
+          "lattice"_a, "embedding"_a, "z_min"_a = -std::numeric_limits<double>::infinity(),
+          "The points (n x 3) deformed by the lattice's positions now; z_min a floor.")
+      .def_property_readonly("points_redone", &CachedDeform::points_redone,
+                             "Points the last call computed.")
+      .def_property_readonly("tolerance", &CachedDeform::tolerance, "m.");
 }
 
 }  // namespace thinburn::bind

@@ -50,8 +50,9 @@ BENDING_KEYS = _names("bending", exclude=("cp",))  # the material's Cp
 PARTICLE_PREFIX = "particle_"
 PARTICLE_KEYS = _names("particles", exclude=("seed",))  # seed=
 
-# Keyword overrides accepted by Simulation(**params), with their bounds: the fire's scalars of
-# the core's table but the Simulation's own arguments and what only the material sets.
+# Keyword overrides accepted by Simulation(**params), with their bounds: the scalars of the
+# core's table (the fire's, and the mesh's mesh_tolerance) but the Simulation's own arguments
+# and what only the material sets.
 _FIRE_KEYS = _names("simulation", exclude=(
     "cells", "geometry", "front", "seed", "shell", "lattice", "has_floor", "floor_z",  # arguments
     "finish_within", "ignition_temperature",                    # finish_within=, heat_ignites=
@@ -154,7 +155,12 @@ class Simulation:
           ``particle_birth_rate``, ``particle_temperature0``, ``particle_cooling``,
           ``particle_lifetime``, ``particle_lifetime_jitter``, ``particle_buoyancy``,
           ``particle_drag``, ``particle_turbulence``, ``particle_birth_speed``,
-          ``particle_vertical_band``.
+          ``particle_vertical_band``;
+        * the mesh: ``mesh_tolerance`` (share of the sheet's size, default 1e-6: a lattice
+          couple that drifted less than that since its mesh vertices were last deformed keeps
+          them as they are, so each vertex is within twice that of its exact place, 2 µm on a
+          1 m sheet; 0: every vertex of a moved couple is redone, bit for bit a full deform;
+          a grid lattice's mesh only, docs/lattice.md "The mesh's tolerance").
     """
 
     def __init__(self, vertices, faces, uv=None, material="paper", cells=128, seed=0,
