@@ -253,6 +253,21 @@ int Contacts::contact_substeps(double dt) const {
   return static_cast<int>(std::min(need, double(s_.p.max_substeps)));
 }
 
+double Contacts::friction_reserve(int v, const Eigen::Vector3d& f) const {
+  // What static friction could still take beyond f's tangential part: friction times the
+  // inward push, less that part (negative once f slides the vertex; -inf off any support).
+  const RowMatX3& x = s_.lattice.positions();
+  double reserve = -std::numeric_limits<double>::infinity();
+  if (s_.p.has_floor && x(v, 2) <= floor_at(v) && f.z() < 0.0)
+    reserve = s_.p.friction * -f.z() - std::hypot(f.x(), f.y());
+  ColliderHit hit;
+  if (collider_contact(x.row(v).transpose(), hit)) {
+    const double fn = f.dot(hit.normal);
+    if (fn < 0.0) reserve = std::max(reserve, hit.friction * -fn - (f - fn * hit.normal).norm());
+  }
+  return reserve;
+}
+
 Eigen::Vector3d Contacts::supported(int v, Eigen::Vector3d f) const {
   const RowMatX3& x = s_.lattice.positions();
   if (s_.p.has_floor && x(v, 2) <= floor_at(v) && f.z() < 0.0) {

@@ -77,6 +77,10 @@ class Contacts {
   int apply_colliders(double h);
   /// @brief Substeps of a step dt that the vertices nearing a collider need.
   int contact_substeps(double dt) const;
+  /// @brief Force (N) that static friction could still take at vertex v, which force f
+  /// presses on the floor or a collider, beyond f's own tangential part; < 0 when f slides it
+  /// or it touches nothing.
+  double friction_reserve(int v, const Eigen::Vector3d& f) const;
   /// @brief f less what a floor or a collider that vertex v rests on takes of it.
   Eigen::Vector3d supported(int v, Eigen::Vector3d f) const;
 

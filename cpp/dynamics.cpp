@@ -6,6 +6,7 @@
 #include <stdexcept>
 #include <string>
 
+#include <Eigen/Cholesky>
 #include <Eigen/Geometry>
 
 #include "crumple.hpp"
@@ -147,7 +148,7 @@ LatticeDynamics::~LatticeDynamics() = default;
 LatticeDynamics::LatticeDynamics(FfdLattice& lattice, const DynamicsParams& p, LatticeTopology topology)
     : lat_(lattice), p_(p), topo_(topology.couples > 0 ? std::move(topology) : grid_topology(lattice.M())),
       C_(lattice.couples()), n_(lattice.size()), bimetal_({topo_, lat_.rest(), sa_, sb_, rest_len_, p_}),
-      sleep_(n_, inc_, pinned_, mass_, p_),
+      sleep_(n_, inc_, pinned_, p_),
       contacts_(n_, {lat_, vel_, drift_, mass_, active_, slot_, inc_, kind_, rest_len_, p_}),
       solver_({active_, slot_, inc_, vert_spring_, mass_, contacts_, p_}) {
   validate(p);
@@ -423,6 +424,35 @@ Eigen::Vector3d LatticeDynamics::vertex_force(int v, const RowMatX3& x, const Ro
     f += p_.wind_drag * area_(v) * (wind - vel.row(v).transpose()).dot(n) * n;
   }
   return f;
+}
+
+double LatticeDynamics::free_speed(int v, double dt) const {
+  return contacts_.supported(v, vertex_force(v, lat_.positions(), vel_)).norm() / mass_(v) * dt;
+}
+
+double LatticeDynamics::held_speed(int v, double dt) const {
+  // A sleeper whose springs tie it to anchors moves as backward Euler on it alone says, the
+  // anchors fixed: (m/dt + dt K) u = f, K the Hessian block of its springs to them (geometric
+  // part clamped, so positive semidefinite). An anchor is pinned, or a sleeper resting on the
+  // floor or a collider whose static friction could take all of f on top of its own load.
+  // Along a stiff spring that speed is the quasi-static f / (k dt), not the free f dt / m:
+  // an awake neighbour's drift stresses the top layer of a paper sheet lying on a table by k
+  // times a few nanometres, a force that would move it by those nanometres. Springs to other
+  // sleepers count for nothing: held by them, each of a row of sleepers would lag by its own
+  // bit and the lags add up along the row, and a sleeper that holds a force passes none of it
+  // on (a strip drooping over a table's edge would not pull the part lying on it).
+  const RowMatX3& x = lat_.positions();
+  const Eigen::Vector3d f = contacts_.supported(v, vertex_force(v, x, vel_));
+  const double m = mass_(v), load = f.norm();
+  Eigen::Matrix3d K = Eigen::Matrix3d::Zero();
+  for (int q = inc_.start[v]; q < inc_.start[v + 1]; ++q) {
+    const int o = inc_.other[q], s = inc_.spring[q];
+    const bool anchor = pinned_[o] || (!sleep_.awake()[o] &&
+                                       contacts_.friction_reserve(o, vertex_force(o, x, vel_)) >= load);
+    if (anchor) K += spring_block((x.row(o) - x.row(v)).transpose(), spring_k(s), rest_len_[s], true);
+  }
+  const Eigen::Matrix3d A = (m / dt) * Eigen::Matrix3d::Identity() + dt * K;
+  return A.llt().solve(f).norm();
 }
 
 std::vector<std::uint8_t> LatticeDynamics::awake() const {
@@ -842,9 +872,8 @@ StepStats LatticeDynamics::step(double dt, const Eigen::VectorXd& D, const Eigen
   }
   if (bimetal) bimetal_.apply(D, delta_, bimetal_all_, membrane_.get());
   // What would set a vertex moving: its force less what a floor or a collider it rests on takes.
-  const Sleeping::NetForce net_force = [this](int v) {
-    return contacts_.supported(v, vertex_force(v, lat_.positions(), vel_));
-  };
+  const Sleeping::Speed free = [this, dt](int v) { return free_speed(v, dt); };
+  const Sleeping::Speed held = [this, dt](int v) { return held_speed(v, dt); };
   bool plastic_done = false;
   try {
     for (int pass = 1;; ++pass) {
@@ -863,7 +892,7 @@ StepStats LatticeDynamics::step(double dt, const Eigen::VectorXd& D, const Eigen
       if (!p_.sleeping || pass >= kMaxPasses) break;
       // Redo the step with the sleepers its motion stressed awake, unless they are few next to
       // the awake set: those join the next step (a step late) rather than cost a whole pass.
-      const int woke = sleep_.wake_stressed_sleepers(dt, net_force);
+      const int woke = sleep_.wake_stressed_sleepers(held);
       if (woke == 0 || woke * kRedoShare < st.awake) break;
       for (int a = 0; a < st.awake; ++a) {
         lat_.positions().row(active_[a]) = x_save_.row(a);
@@ -882,7 +911,7 @@ StepStats LatticeDynamics::step(double dt, const Eigen::VectorXd& D, const Eigen
   if (bimetal) bimetal_all_ = false;
   st.factorizations = solver_.factorizations();
   D_prev_ = D;
-  if (p_.sleeping) sleep_.update_sleep(dt, vel_, accel_, net_force);
+  if (p_.sleeping) sleep_.update_sleep(vel_, accel_, free);
   sleep_.end_step();
   for (int v = 0; v < n_; ++v)
     if (sleep_.awake()[v]) heat_prev_(v) = heat_(v);

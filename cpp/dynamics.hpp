@@ -255,6 +255,10 @@ class LatticeDynamics {
   void refresh_spring_scale();
   double omega_bound(const std::vector<int>& verts) const;
   Eigen::Vector3d vertex_force(int v, const RowMatX3& x, const RowMatX3& vel) const;
+  /// Speeds v's net force (less a floor's or collider's reaction) would give it within dt:
+  /// free, nothing holding it back; held, its springs to its neighbours holding it (Sleeping).
+  double free_speed(int v, double dt) const;
+  double held_speed(int v, double dt) const;
   Eigen::Vector3d couple_normal(int v, const RowMatX3& x) const;
   int choose_substeps(double dt, double omega, double c_eff) const;
   int integrate(double dt, int substeps, StepStats& st);

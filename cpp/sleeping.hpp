@@ -20,14 +20,14 @@ constexpr int kMaxHold = 10000;
 
 class Sleeping {
  public:
-  /// @brief Net force on a vertex at the current state, the floor's and colliders' reactions
-  /// included (what would set it moving).
-  using NetForce = std::function<Eigen::Vector3d(int)>;
+  /// @brief A speed vertex v would reach within the step, moved by its net force at the current
+  /// state (the floor's and colliders' reactions taken out).
+  using Speed = std::function<double(int v)>;
 
   /// @brief n control vertices, all awake. The arguments are kept by reference: the springs'
-  /// incidence, the pinned flags, the masses and the parameters of the dynamics that owns this.
+  /// incidence, the pinned flags and the parameters of the dynamics that owns this.
   Sleeping(int n, const SpringIncidence& incidence, const std::vector<std::uint8_t>& pinned,
-           const Eigen::VectorXd& mass, const DynamicsParams& p);
+           const DynamicsParams& p);
 
   void wake(int v) { awake_[v] = 1; }
   void wake_all();
@@ -53,12 +53,13 @@ class Sleeping {
   /// @brief Wake the forced vertices with two rings of spring neighbours, the awake ones
   /// moving at sleep_speed or faster with one.
   void wake_around_forcing(const RowMatX3& vel);
-  /// @brief Wake the sleepers next to an active vertex whose net force would bring them to
-  /// sleep_speed within dt; returns how many woke.
-  int wake_stressed_sleepers(double dt, const NetForce& force);
+  /// @brief Wake the sleepers next to an active vertex that would reach sleep_speed within the
+  /// step, their springs to the rest of the sheet holding them back (held); returns how many woke.
+  int wake_stressed_sleepers(const Speed& held);
   /// @brief At a step's end: put the quiet active vertices to sleep (velocity and the implicit
-  /// warm start accel zeroed), when they are a region and not stragglers.
-  void update_sleep(double dt, RowMatX3& vel, RowMatX3& accel, const NetForce& force);
+  /// warm start accel zeroed), when they are a region and not stragglers. free: the speed its
+  /// net force alone would give a vertex within the step (nothing holding it back).
+  void update_sleep(RowMatX3& vel, RowMatX3& accel, const Speed& free);
   /// @brief Count a step (a sleeper woken within wake_hold steps of falling asleep flickers).
   void end_step() { ++steps_; }
 
@@ -68,7 +69,6 @@ class Sleeping {
   int n_;
   const SpringIncidence& inc_;
   const std::vector<std::uint8_t>& pinned_;
-  const Eigen::VectorXd& mass_;
   const DynamicsParams& p_;
   std::vector<std::uint8_t> awake_, forced_;
   std::vector<std::uint16_t> hold_;      // steps a flickering sleeper still stays awake

@@ -13,11 +13,12 @@ from lattice_cases import grid_rest
 DT = 1 / 24
 
 
-def corner_fire(mesh, threads=1, lattice=33, mesh_tolerance=0.0):
-    # On a table: a sheet in free fall moves every couple every frame, and redoes every vertex.
-    # mesh_tolerance 0: every moved couple's vertices are redone, bit for bit a full deform.
+def corner_fire(mesh, threads=1, lattice=33, mesh_tolerance=0.0, floor=0.0):
+    # On a table (floor 0): a sheet in free fall (floor None) moves every couple every frame, and
+    # redoes every vertex. mesh_tolerance 0: every moved couple's vertices are redone, bit for
+    # bit a full deform.
     sim = thinburn.Simulation(*mesh, material="paper", cells=64, lattice=lattice, threads=threads,
-                              floor=0.0, mesh_tolerance=mesh_tolerance)
+                              floor=floor, mesh_tolerance=mesh_tolerance)
     sim.ignite((0.0, 0.0, 0.0), time=0.0, radius=0.03)
     return sim
 
@@ -29,16 +30,16 @@ def sheet():
     return rect_sheet(1.0, 1.0, nx=101, ny=101)
 
 
-# Measured over the 72 frames (10201 vertices): at M = 33 every frame after the second redid
-# 19-33 % of the vertices, by their stencil groups; at M = 17 more than half moved in all but
-# one frame, which deform every vertex straight into the result instead.
-@pytest.mark.parametrize("lattice, min_partial, min_full", [(33, 60, 0), (17, 1, 40)])
-def test_kept_vertices_are_bit_identical_to_a_full_deform(sheet, lattice, min_partial, min_full):
+# Measured over the 72 frames (10201 vertices): on the table at M = 33, 70 frames redid part of
+# the vertices, by their stencil groups, and one all of them; falling freely at M = 17 every
+# couple moves, and the 71 frames after the first deform every vertex straight into the result.
+@pytest.mark.parametrize("lattice, floor, min_partial, min_full", [(33, 0.0, 60, 0), (17, None, 0, 70)])
+def test_kept_vertices_are_bit_identical_to_a_full_deform(sheet, lattice, floor, min_partial, min_full):
     # Sim a asks for the mesh every frame (each call redoes only what moved); sim b, the same
     # deterministic run, asks only at frames 24, 48, 72 and its first call deforms every vertex.
     frames, checks = 72, (24, 48, 72)
-    a = corner_fire(sheet, lattice=lattice)
-    fresh = {k: corner_fire(sheet, lattice=lattice) for k in checks}
+    a = corner_fire(sheet, lattice=lattice, floor=floor)
+    fresh = {k: corner_fire(sheet, lattice=lattice, floor=floor) for k in checks}
     partial = full = 0
     for f in range(1, frames + 1):
         a.step(DT)
@@ -104,8 +105,8 @@ def test_phase_seconds_name_every_phase(sheet):
 
 
 # --- the tolerance (mesh_tolerance; CachedDeform's tolerance) -------------------------------
-@pytest.mark.parametrize("tol", [1e-6, 1e-4])
-def test_a_tolerance_keeps_every_vertex_within_twice_it_and_redoes_fewer(sheet, tol):
+@pytest.mark.parametrize("tol, share", [(1e-6, 0.45), (1e-4, 0.25)])
+def test_a_tolerance_keeps_every_vertex_within_twice_it_and_redoes_fewer(sheet, tol, share):
     """A burning sheet asked for its mesh every frame with mesh_tolerance > 0 against the same
     run at 0 (a full deform's result, bit for bit: the test above): the lattice moves the same
     (the tolerance is the mesh's only), every vertex stays within 2 tol (the sheet is 1 m, so
@@ -121,13 +122,13 @@ def test_a_tolerance_keeps_every_vertex_within_twice_it_and_redoes_fewer(sheet, 
         if f > 0:  # the first call deforms every vertex either way
             redone_exact += exact.mesh_points_redone
             redone_lagged += lagged.mesh_points_redone
-    # The bound (cpp/lattice.cpp, moved_points), up to rounding; measured 0.86 tol at 1e-6 and
-    # 0.93 tol at 1e-4: the vertices do lag, near the bound, so the check is not vacuous.
+    # The bound (cpp/lattice.cpp, moved_points), up to rounding; measured 0.85 tol at 1e-6 and
+    # 0.92 tol at 1e-4: the vertices do lag, near the bound, so the check is not vacuous.
     assert worst <= 2 * tol + 1e-12, worst / tol
     assert worst >= 0.5 * tol, worst / tol
-    # Measured over frames 2-72: 177733 vertices redone exact, 21691 (12 %) at 1e-6, 11686
-    # (6.6 %) at 1e-4.
-    assert redone_lagged <= 0.2 * redone_exact, (redone_lagged, redone_exact)
+    # Measured over frames 2-72: 51476 vertices redone exact (the couples that sleep redo
+    # none), 21942 (43 %) at 1e-6, 11726 (23 %) at 1e-4.
+    assert redone_lagged <= share * redone_exact, (redone_lagged, redone_exact)
 
 
 def _node_lattice(M=5, L=0.1):
