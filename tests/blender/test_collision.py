@@ -56,3 +56,24 @@ def test_an_open_collision_mesh_is_warned_about_and_left_out(addon, tmp_path):
     job.cancel()
     assert job.colliders == ["Sphere"]
     assert any("Ground" in w and "not a closed mesh" in w for w in job.warnings), job.warnings
+
+
+def test_blender_default_collision_settings_are_not_warned_about(addon):
+    """A new Collision modifier has Damping 0.1 and Single Sided on; warning about those warned
+    on every bake with a Collision object. The panel's note says what is used instead."""
+    sheet = make_sheet(n=5, size=0.2, z=0.3)
+    setup_bake(sheet, frames=2, cells=16, floor=False)
+    box = make_uv_sphere(radius=0.05, segments=8, rings=4, centre=(0.0, 0.0, 0.1))
+    box.modifiers.new("Collision", "COLLISION")
+    inputs = addon.inputs
+    assert inputs.collision_warnings(bpy.context.view_layer, sheet.name, shell=True) == []
+    assert "Friction and Outer thickness" in inputs.collision_note(bpy.context.view_layer, sheet.name)
+    box.collision.damping = 0.5
+    box.collision.use_culling = False  # both sides, as ThinBurn: nothing to warn about
+    warned = inputs.collision_warnings(bpy.context.view_layer, sheet.name, shell=True)
+    assert len(warned) == 1 and "Damping not used" in warned[0], warned
+
+
+def test_no_collision_note_without_a_collision_object(addon):
+    sheet = make_sheet(n=5, size=0.2, z=0.3)
+    assert addon.inputs.collision_note(bpy.context.view_layer, sheet.name) is None
