@@ -127,13 +127,17 @@ def table(args):
     """A4 paper lying on a cube table that has Collision physics (no floor), lit at a corner."""
     import bpy
     top = 0.0
-    desk = _collision(H.make_box_table(top=top, size=0.6))
+    desk = H.make_box_table(top=top, size=0.6)
+    if not args.table_floor:  # else the cube is the Floor Object, to compare
+        _collision(desk)
     desk.data.materials.append(_material("Table", (0.12, 0.08, 0.05)))
     sheet = H.make_rect(name="Paper", nx=43, ny=61, z=top + 0.003)
     sheet.data.materials.append(_material("Paper", (0.85, 0.83, 0.78)))
     s = H.setup_bake(sheet, frames=args.frames, cells=args.cells, cache_dir=args.cache, floor=False)
     s.threads, s.material, s.mat_V0 = 0, "paper", args.v0
     s.flame_intensity, s.flame_temperature = 2.0, 1700.0
+    if args.table_floor:
+        s.floor_mode, s.floor_object = "OBJECT", desk
     H.make_igniter(sheet, (0.105, 0.1485, top + 0.003), lit_from=1, radius=args.radius)
 
     def measure(rest, world):
@@ -282,6 +286,8 @@ def main(argv=None) -> int:
     ap.add_argument("--frames", type=int, default=144, help="frames to bake (24 fps)")
     ap.add_argument("--stretch-limit", type=float, default=2.0, help="silk: Stretch Limit, %%")
     ap.add_argument("--wind", type=float, default=2.0, help="silk: the Wind field's Strength")
+    ap.add_argument("--table-floor", action="store_true",
+                    help="table: the cube is the sheet's Floor Object instead of a Collision object")
     ap.add_argument("--without-addon", action="store_true",
                     help="also save, disable the add-on, reopen and render (drape_<scene>_noaddon_<frame>)")
     ap.add_argument("--render", type=int, nargs="*", default=[12, 48, 144], help="frames to render")
