@@ -8,7 +8,8 @@ import pytest
 bpy = pytest.importorskip("bpy")
 pytestmark = pytest.mark.blender
 
-from blender_helpers import cache_file, make_igniter, make_sheet, make_uv_sphere, setup_bake  # noqa: E402
+from blender_helpers import (cache_file, make_box_table, make_igniter, make_rect, make_sheet,  # noqa: E402
+                             make_uv_sphere, setup_bake)
 
 R, TOP = 0.1, 0.2  # the sphere's radius and top (centre at z = 0.1)
 
@@ -83,7 +84,6 @@ def test_paper_rests_on_a_collision_table_without_sinking(addon, tmp_path):
     """A4 paper 3 mm above a cube with Collision (the artist's table, no Floor) settles on it:
     never below its top, and at the gap docs/blender.md gives ("A table top: prefer Floor:
     Object"): the lattice's bottom layer a margin off the top, the mesh half a thickness above."""
-    from blender_helpers import make_box_table, make_rect
     table = make_box_table(top=0.0, size=0.6)
     table.modifiers.new("Collision", "COLLISION")
     table.collision.cloth_friction = 50.0
