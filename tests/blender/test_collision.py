@@ -100,3 +100,14 @@ def test_paper_rests_on_a_collision_table_without_sinking(addon, tmp_path):
     # Measured (frame 30, unlit): lowest 11.00 mm, as render_drape.py's burning table at frames 25-150
     # (10.94-10.99 mm); tolerance 1 mm each way: a change of the contact's margin shows here.
     assert 0.010 < z.min() < 0.012, z.min()
+
+
+def test_the_panel_notes_which_collision_settings_are_used(addon):
+    from test_addon import _Context, _Layout
+    sheet = make_sheet(n=5, size=0.2, z=0.3)
+    sheet.thinburn.enabled = True
+    make_uv_sphere(radius=0.05, segments=8, rings=4, centre=(0.0, 0.0, 0.1)).modifiers.new("Collision", "COLLISION")
+    drawn = []
+    addon.panels.PHYSICS_PT_thinburn.draw(type("P", (), {"layout": _Layout(drawn)})(), _Context(sheet))
+    text = " ".join(d[len("label: "):] for d in drawn if d.startswith("label: "))
+    assert "Friction and Outer thickness" in text and "ignores Damping" in text, text
