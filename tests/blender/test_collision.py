@@ -111,3 +111,21 @@ def test_the_panel_notes_which_collision_settings_are_used(addon):
     addon.panels.PHYSICS_PT_thinburn.draw(type("P", (), {"layout": _Layout(drawn)})(), _Context(sheet))
     text = " ".join(d[len("label: "):] for d in drawn if d.startswith("label: "))
     assert "Friction and Outer thickness" in text and "ignores Damping" in text, text
+
+
+def test_a_floor_object_with_collision_is_the_floor_only(addon, tmp_path):
+    """Quick Burn makes the Collision cube a plane lies on its Floor Object; as a collider as
+    well, with Blender's default Outer thickness (2 cm), it lifted the sheet 26 mm off it."""
+    table = make_box_table(top=0.0, size=0.6)
+    table.modifiers.new("Collision", "COLLISION")  # Blender's defaults: Outer thickness 0.02 m
+    sheet = make_rect(name="Sheet", width=0.2, height=0.2, nx=21, ny=21, z=0.003)
+    s = setup_bake(sheet, frames=12, cells=32, cache_dir=tmp_path / "cache", floor=False)
+    s.floor_mode, s.floor_object = "OBJECT", table
+    make_igniter(sheet, (0.1, 0.1, 0.003), lit_from=1000)  # never lit: the motion alone
+    job = addon.job.BakeJob(bpy.context, sheet)
+    job.run()
+    assert job.colliders == []
+    assert any("Floor Object and has Collision" in w for w in job.warnings), job.warnings
+    _, data = addon.cache.read_pc2(cache_file(tmp_path / "cache", "Sheet.pc2"))
+    # Measured: 0.5 mm (the floor's margin) from frame 2 on; 26.2 mm with the cube a collider too.
+    assert abs(float(data[-1][:, 2].min()) - 0.0005) < 2e-4
