@@ -210,7 +210,7 @@ def lantern(args):
         out = {}
         for name, p in probes.items():
             k = int(np.argmin(np.linalg.norm(rest - np.asarray(p), axis=1)))
-            out[f"ignite_s_{name}"] = round(float(ignite[k]), 2) if ignite[k] < 1e8 else None
+            out[f"ignite_frame_{name}"] = round(float(ignite[k]), 2) if ignite[k] < 1e8 else None
         lit = ignite < 1e8
         out["ignited_mean_x_m"] = round(float(rest[lit, 0].mean()), 4) if lit.any() else None
         return out
