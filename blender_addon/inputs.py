@@ -602,10 +602,32 @@ def collision_warnings(view_layer, sheet_name: str, shell: bool) -> list:
             out.append(f"'{ob.name}' (Collision) does not hold the sheet: collisions need Crumple on "
                        "(Physics > ThinBurn)")
             continue
-        c = ob.collision
-        ignored = [label for label, on in (("Damping", c.damping > 0), ("Single Sided", c.use_culling),
-                                           ("Override Normals", c.use_normal)) if on]
+        ignored = changed_collision_settings(ob.collision)
         if ignored:
             out.append(f"Collision '{ob.name}': {', '.join(ignored)} not used by ThinBurn: it uses "
                        "Friction and Outer thickness only, and collides with both sides")
     return out
+
+
+# What a ThinBurn sheet reads of Blender's Collision physics (docs/blender.md, "Collision
+# objects"); the panel says it, so that the report need not warn about settings left alone.
+COLLISION_NOTE = ("Collision objects: ThinBurn uses their Friction and Outer thickness; it "
+                  "ignores Damping, Single Sided (it collides with both sides), Override Normals, "
+                  "Inner thickness and the particle settings")
+
+# Blender's defaults of the Collision settings ThinBurn ignores (a new Collision modifier in
+# bpy 4.2-5.0: Damping 0.1, Single Sided on, Override Normals off). Every new Collision has
+# them, so warning about them warned on every bake; the report names only those changed.
+IGNORED_COLLISION_DEFAULTS = (("Damping", "damping", 0.1), ("Override Normals", "use_normal", False))
+
+
+def changed_collision_settings(c) -> list:
+    """Labels of the ignored Collision settings that differ from Blender's defaults. Single
+    Sided is not among them: on (the default) or off, a ThinBurn sheet meets both sides."""
+    return [label for label, attr, default in IGNORED_COLLISION_DEFAULTS
+            if abs(float(getattr(c, attr)) - float(default)) > 1e-6]
+
+
+def collision_note(view_layer, sheet_name: str):
+    """The panel's line on Collision objects, when the view layer has one besides the sheet."""
+    return COLLISION_NOTE if collision_objects(view_layer, sheet_name) else None

@@ -206,6 +206,7 @@ class BakeJob:
         if self.grouped:
             self.warnings += inputs.group_setting_warnings(obj, objs[1:])
         self.warnings += inputs.collision_warnings(context.view_layer, obj.name, self.shell)
+        self._drop_floor_collider(settings)
         self._drop_open_colliders()
         if self.flames and not settings.heat_ignites:
             self.warnings.append(
@@ -414,6 +415,17 @@ class BakeJob:
                          flames=flames, colliders=self._collider_task(k))
 
     # --- collision objects -------------------------------------------------------------------
+    def _drop_floor_collider(self, settings) -> None:
+        """The Floor Object holds the sheet on its top already; its Collision as well kept the
+        lattice a margin plus its Outer thickness above that (Blender's default 2 cm: Quick Burn
+        on a plane on a Collision cube floated 26 mm up), so the floor alone is used."""
+        floor = settings.floor_object if settings.floor_mode == "OBJECT" else None
+        if floor is None or floor.name not in self.colliders:
+            return
+        self.colliders = [n for n in self.colliders if n != floor.name]
+        self.warnings.append(f"'{floor.name}' is the Floor Object and has Collision: the sheet "
+                             "rests on the Floor; its Collision is not used")
+
     def _drop_open_colliders(self) -> None:
         """An open mesh has no inside to push the sheet out of: warn and leave it out."""
         if not (self.shell and self.colliders):

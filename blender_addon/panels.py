@@ -54,6 +54,9 @@ class PHYSICS_PT_thinburn(ThinBurnPhysicsPanel, bpy.types.Panel):
         if settings.enabled:
             for text in sheet_warnings(context, context.object):
                 warning(layout, text)
+            note = inputs.collision_note(context.view_layer, context.object.name)
+            if note and settings.crumple:
+                warning(layout, note, icon="INFO")
 
 
 def sheet_warnings(context, obj) -> list:
@@ -69,12 +72,12 @@ def sheet_warnings(context, obj) -> list:
     return out + inputs.wind_warnings(context.view_layer)
 
 
-def warning(layout, text: str, width: int = 52) -> None:
-    """A warning in the panel, wrapped over as many lines as it needs."""
+def warning(layout, text: str, width: int = 52, icon: str = "ERROR") -> None:
+    """A warning (or with icon INFO, a note) in the panel, wrapped over as many lines as it needs."""
     import textwrap
     col = layout.column(align=True)
     for i, line in enumerate(textwrap.wrap(text, width)):
-        col.label(text=line, icon="ERROR" if i == 0 else "BLANK1")
+        col.label(text=line, icon=icon if i == 0 else "BLANK1")
 
 
 class PHYSICS_PT_thinburn_motion(ThinBurnPhysicsPanel, bpy.types.Panel):

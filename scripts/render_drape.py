@@ -10,6 +10,13 @@ Each is baked with the add-on from this checkout (bpy as a module, throwaway use
 tests/blender does), rendered in Cycles at the --render frames, and measured from the cache:
 the lowest and highest rim height, the cache vertices inside the sphere, the pinned vertices'
 largest motion, the largest edge strain. Writes docs/images/drape_<scene>_<frame>.png.
+
+An artist's trial (docs/blender.md): ``table`` (A4 paper on a cube with Collision physics, no
+Floor; ``--table-floor`` makes the cube its Floor Object instead), ``silk`` (a silk curtain
+pinned along its top in a Wind field, with ``--stretch-limit``), ``lantern`` (a cylinder
+without caps lit at its bottom), ``rod`` (cloth dropped over a thin cylinder with Collision).
+``--without-addon`` then saves the .blend, disables the add-on, reopens it, renders the same
+frames again and prints the largest pixel difference.
 """
 from __future__ import annotations
 
@@ -114,7 +121,130 @@ def curtain(args):
     return sheet, ((0.35, -0.7, 0.4), (0.0, 0.0, 0.28)), measure
 
 
-SCENES = {"drape": drape, "curtain": curtain}
+# --- an artist's trial (the four scenes of the Blender trial, docs/blender.md "An artist's trial") ---
+def _collision(ob, friction=50.0):
+    """Blender's Collision physics as an artist adds it (Friction 50 = Coulomb 0.5)."""
+    ob.modifiers.new("Collision", "COLLISION")
+    ob.collision.cloth_friction = friction
+    ob.collision.thickness_outer = 0.001
+    return ob
+
+
+def table(args):
+    """A4 paper lying on a cube table that has Collision physics (no floor), lit at a corner."""
+    import bpy
+    top = 0.0
+    desk = H.make_box_table(top=top, size=0.6)
+    if not args.table_floor:  # else the cube is the Floor Object, to compare
+        _collision(desk)
+    desk.data.materials.append(_material("Table", (0.12, 0.08, 0.05)))
+    sheet = H.make_rect(name="Paper", nx=43, ny=61, z=top + 0.003)
+    sheet.data.materials.append(_material("Paper", (0.85, 0.83, 0.78)))
+    s = H.setup_bake(sheet, frames=args.frames, cells=args.cells, cache_dir=args.cache, floor=False)
+    s.threads, s.material, s.mat_V0 = 0, "paper", args.v0
+    s.flame_intensity, s.flame_temperature = 2.0, 1700.0
+    if args.table_floor:
+        s.floor_mode, s.floor_object = "OBJECT", desk
+    H.make_igniter(sheet, (0.105, 0.1485, top + 0.003), lit_from=1, radius=args.radius)
+
+    def measure(rest, world):
+        z = world[..., 2] - top
+        return {"lowest_above_top_mm_per_25_frames": [round(1e3 * float(f.min()), 2) for f in z[::25]],
+                "highest_above_top_mm_per_25_frames": [round(1e3 * float(f.max()), 2) for f in z[::25]],
+                "below_top_vertex_frames": int(np.count_nonzero(z < 0.0))}
+    return sheet, ((0.3, -0.35, 0.3), (0.0, 0.0, 0.0)), measure
+
+
+def silk(args):
+    """A 30 x 40 cm silk curtain pinned along its top, in a Blender Wind field along +y,
+    with a Stretch Limit, lit at the middle of its hem."""
+    import bpy
+    nx, nz = 31, 41
+    xs, zs = np.linspace(-0.15, 0.15, nx), np.linspace(0.10, 0.50, nz)
+    verts = [(x, 0.0, z) for z in zs for x in xs]
+    faces = [(j * nx + i, j * nx + i + 1, (j + 1) * nx + i + 1, (j + 1) * nx + i)
+             for j in range(nz - 1) for i in range(nx - 1)]
+    sheet = H.link_mesh("Silk", verts, faces)
+    sheet.data.materials.append(_material("Silk", (0.6, 0.15, 0.2)))
+    pinned = list(range(nx * (nz - 1), nx * nz))
+    sheet.vertex_groups.new(name="top").add(pinned, 1.0, "REPLACE")
+    s = H.setup_bake(sheet, frames=args.frames, cells=args.cells, cache_dir=args.cache, floor=False)
+    s.threads, s.material, s.mat_V0 = 0, "silk", args.v0
+    s.flame_intensity, s.flame_temperature = 2.0, 1700.0
+    s.pin_group = "top"
+    s.mat_strain_limit = args.stretch_limit
+    bpy.ops.object.effector_add(type="WIND", location=(0.0, -0.3, 0.3), rotation=(-math.pi / 2, 0.0, 0.0))
+    bpy.context.active_object.field.strength = args.wind
+    bpy.context.view_layer.objects.active = sheet
+    H.make_igniter(sheet, (0.0, 0.0, 0.10), lit_from=1, radius=args.radius)
+    edges = H.mesh_edges(sheet)
+
+    def measure(rest, world):
+        strain = H.edge_strain(rest, world, edges)
+        return {"max_edge_strain": round(float(strain.max()), 4),
+                "max_edge_strain_frame": int(np.argmax(strain)) + 1,
+                "edge_strain_per_24_frames": [round(float(x), 4) for x in strain[::24]],
+                "largest_downwind_mm": round(1e3 * float(world[..., 1].max()), 1),
+                "pinned_largest_motion_mm": round(1e3 * float(np.linalg.norm(
+                    world[:, pinned] - rest[pinned], axis=2).max()), 3)}
+    return sheet, ((0.55, -0.75, 0.35), (0.0, 0.05, 0.28)), measure
+
+
+def lantern(args):
+    """A paper lantern: Blender's cylinder without caps standing on a table, lit at its bottom
+    on the +x side (the camera looks at that side)."""
+    desk = H.make_box_table(top=0.0, size=1.2)
+    desk.data.materials.append(_material("Table", (0.12, 0.08, 0.05)))
+    sheet = H.make_lantern(radius=0.1, depth=0.3, segments=64, cuts=23)
+    sheet.data.materials.append(_material("Paper", (0.85, 0.83, 0.78)))
+    s = H.setup_bake(sheet, frames=args.frames, cells=args.cells, cache_dir=args.cache, floor=False)
+    s.threads, s.material, s.mat_V0 = 0, "paper", args.v0
+    s.flame_intensity, s.flame_temperature = 2.0, 1700.0
+    s.floor_mode, s.floor_object = "OBJECT", desk
+    H.make_igniter(sheet, (0.1, 0.0, 0.0), lit_from=1, radius=args.radius)
+    probes = {"lit": (0.1, 0.0, 0.0), "lit_up10": (0.1, 0.0, 0.1), "side": (0.0, 0.1, 0.0),
+              "far": (-0.1, 0.0, 0.0)}
+
+    def measure(rest, world):
+        ignite = H.point_attribute(sheet, "thinburn_ignite_time")
+        out = {}
+        for name, p in probes.items():
+            k = int(np.argmin(np.linalg.norm(rest - np.asarray(p), axis=1)))
+            out[f"ignite_frame_{name}"] = round(float(ignite[k]), 2) if ignite[k] < 1e8 else None
+        lit = ignite < 1e8
+        out["ignited_mean_x_m"] = round(float(rest[lit, 0].mean()), 4) if lit.any() else None
+        return out
+    return sheet, ((0.55, -0.2, 0.3), (0.0, 0.0, 0.12)), measure
+
+
+def rod(args):
+    """A 40 cm cloth dropped from 2 cm above a thin rod (a 1 cm cylinder with Collision) above a table."""
+    import bpy
+    desk = H.make_box_table(top=0.0, size=1.2)
+    desk.data.materials.append(_material("Table", (0.12, 0.08, 0.05)))
+    bpy.ops.mesh.primitive_cylinder_add(vertices=24, radius=0.01, depth=0.6, location=(0.0, 0.0, 0.3),
+                                        rotation=(0.0, math.pi / 2, 0.0))
+    bar = _collision(bpy.context.active_object)
+    bar.name = "Rod"
+    bar.data.materials.append(_material("Metal", (0.3, 0.3, 0.32)))
+    sheet = H.make_sheet(name="Cloth", n=args.n, size=0.4, z=0.33)
+    sheet.data.materials.append(_material("Cotton", (0.7, 0.62, 0.5)))
+    bpy.context.view_layer.objects.active = sheet
+    bpy.ops.object.shade_smooth()
+    s = _common(sheet, desk, args, "cloth")
+    H.make_igniter(sheet, (0.2, 0.2, 0.33), lit_from=1, radius=args.radius)
+
+    def measure(rest, world):
+        d = np.linalg.norm(world[..., 1:] - (0.0, 0.3), axis=2)  # distance from the rod's axis
+        return {"nearest_to_axis_minus_r_mm": round(1e3 * float(d.min() - 0.01), 2),
+                "inside_rod_vertex_frames": int(np.count_nonzero((d < 0.01) & (np.abs(world[..., 0]) < 0.3))),
+                "lowest_z_m_per_24_frames": [round(float(f[:, 2].min()), 4) for f in world[::24]],
+                "middle_z_m_last": round(float(world[-1, np.argmin(np.linalg.norm(rest[:, :2], axis=1)), 2]), 4)}
+    return sheet, ((0.5, -0.55, 0.45), (0.0, 0.0, 0.2)), measure
+
+
+SCENES = {"drape": drape, "curtain": curtain, "table": table, "silk": silk, "lantern": lantern,
+          "rod": rod}
 
 
 def bake_and_measure(name, args):
@@ -139,6 +269,31 @@ def bake_and_measure(name, args):
     return cam
 
 
+def render_without_addon(name, args, work):
+    """Save the .blend, disable the add-on, reopen the file and render again: what the bake
+    leaves must render in a Blender that does not have ThinBurn."""
+    import addon_utils
+    import bpy
+    path = work / f"{name}.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(path))
+    addon_utils.disable(ADDON_NAME, default_set=True)
+    try:
+        bpy.ops.wm.open_mainfile(filepath=str(path))
+        render_frames(args.render, lambda frame: args.out / f"drape_{name}{args.suffix}_noaddon_{frame:03d}.png")
+    finally:
+        addon_utils.enable(ADDON_NAME, default_set=True)
+    for frame in args.render:
+        print(f"frame {frame}: largest pixel difference without the add-on "
+              f"{_pixel_difference(args.out, f'{name}{args.suffix}', frame)} (of 255)", flush=True)
+
+
+def _pixel_difference(folder, stem, frame) -> int:
+    from PIL import Image
+    with_addon, without = (np.asarray(Image.open(folder / f"drape_{stem}{tag}_{frame:03d}.png"), dtype=np.int16)
+                           for tag in ("", "_noaddon"))
+    return int(np.abs(with_addon - without).max())
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--scenes", nargs="+", default=list(SCENES), choices=list(SCENES))
@@ -146,6 +301,12 @@ def main(argv=None) -> int:
     ap.add_argument("--width", type=int, default=320)
     ap.add_argument("--samples", type=int, default=16)
     ap.add_argument("--frames", type=int, default=144, help="frames to bake (24 fps)")
+    ap.add_argument("--stretch-limit", type=float, default=2.0, help="silk: Stretch Limit, %%")
+    ap.add_argument("--wind", type=float, default=2.0, help="silk: the Wind field's Strength")
+    ap.add_argument("--table-floor", action="store_true",
+                    help="table: the cube is the sheet's Floor Object instead of a Collision object")
+    ap.add_argument("--without-addon", action="store_true",
+                    help="also save, disable the add-on, reopen and render (drape_<scene>_noaddon_<frame>)")
     ap.add_argument("--render", type=int, nargs="*", default=[12, 48, 144], help="frames to render")
     ap.add_argument("--cells", type=int, default=48, help="Fire Detail")
     ap.add_argument("--lattice", type=int, default=16, help="Motion Detail")
@@ -167,6 +328,8 @@ def main(argv=None) -> int:
                 continue
             camera_and_world(cam, args.width, args.samples)
             render_frames(args.render, lambda frame: args.out / f"drape_{name}{args.suffix}_{frame:03d}.png")
+            if args.without_addon:
+                render_without_addon(name, args, work)
     finally:
         shutil.rmtree(work, ignore_errors=True)
     return 0
