@@ -5,6 +5,7 @@
 /// substep, the substeps contacts need, and the force a contact leaves a resting vertex.
 #include <Eigen/Core>
 
+#include <algorithm>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -16,6 +17,34 @@
 namespace thinburn {
 
 struct DynamicsParams;
+
+/// @brief Coulomb friction's kept share of a contact's tangential speed t (m/s) when the contact
+/// takes `removed` (m/s, >= 0) of normal speed: t drops by friction * removed, not below 0.
+inline double coulomb_keep(double t, double friction, double removed) {
+  return t > friction * removed ? (t - friction * removed) / t : 0.0;
+}
+
+/// @brief An inelastic contact with Coulomb friction on a velocity u relative to the support
+/// (normal n, unit): its normal speed un, the inward part removed, the tangential velocity ut and
+/// the share keep of it that friction leaves; after() is the velocity the contact leaves.
+struct InelasticCoulomb {
+  Eigen::Vector3d n;
+  double un;
+  double removed;
+  Eigen::Vector3d ut;
+  double keep;
+  Eigen::Vector3d after() const { return std::max(un, 0.0) * n + keep * ut; }
+};
+
+inline InelasticCoulomb inelastic_coulomb(const Eigen::Vector3d& u, const Eigen::Vector3d& n, double friction) {
+  InelasticCoulomb c;
+  c.n = n;
+  c.un = u.dot(n);
+  c.removed = std::max(0.0, -c.un);
+  c.ut = u - c.un * n;
+  c.keep = coulomb_keep(c.ut.norm(), friction, c.removed);
+  return c;
+}
 
 class Contacts {
  public:
