@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <memory>
+#include <utility>
 #include <vector>
 
 #include "colliders.hpp"
@@ -73,6 +74,17 @@ class Contacts {
   /// @brief A step of dt starts: the colliders' velocities over it (ColliderMotion); true once
   /// after each change of the colliders' version (a collider moved).
   bool colliders_moved(double dt);
+  /// @brief What colliders_moved changes: the colliders' motion and the version seen. A step
+  /// that is rolled back puts it back, so the step retried sees the same colliders' move.
+  struct ColliderState {
+    ColliderMotion motion;
+    std::uint64_t version = 0;
+  };
+  ColliderState collider_state() const { return ColliderState{motion_, collider_version_}; }
+  void restore(ColliderState&& s) {
+    motion_ = std::move(s.motion);
+    collider_version_ = s.version;
+  }
 
 
   // The implicit solve's filter (Baraff and Witkin's S): a contact's v_z, and a sticking
