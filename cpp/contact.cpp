@@ -122,8 +122,9 @@ void Contacts::press(int v) {
   // 3 m/s wind: 9 mm in 20 s at h = 1/6000 s).
   RowMatX3& vel = s_.vel;
   if (s_.p.has_floor && s_.lattice.positions()(v, 2) <= floor_at(v) && vel(v, 2) <= 0.0) {
-    const double removed = -vel(v, 2), t = std::hypot(vel(v, 0), vel(v, 1));
-    const double keep = t > s_.p.friction * removed ? (t - s_.p.friction * removed) / t : 0.0;
+    // The floor's tangent plane is x-y: hypot of the two in-plane components, not the 3-vector
+    // norm of inelastic_coulomb (that rounds differently and would change every floor burn).
+    const double keep = coulomb_keep(std::hypot(vel(v, 0), vel(v, 1)), s_.p.friction, -vel(v, 2));
     vel(v, 0) *= keep;
     vel(v, 1) *= keep;
     vel(v, 2) = 0.0;
@@ -146,8 +147,7 @@ void Contacts::apply_floor(double h) {
       vel(v, 2) = std::max(0.0, vel(v, 2));
     }
     if (removed < 0.0) continue;
-    const double t = std::hypot(vel(v, 0), vel(v, 1));
-    const double keep = t > s_.p.friction * removed ? (t - s_.p.friction * removed) / t : 0.0;
+    const double keep = coulomb_keep(std::hypot(vel(v, 0), vel(v, 1)), s_.p.friction, removed);
     vel(v, 0) *= keep;
     vel(v, 1) *= keep;
   }
@@ -190,18 +190,13 @@ int Contacts::apply_colliders(double h) {
     }
     // Normal and friction act on the velocity relative to the collider: a moving box lifts and
     // carries what rests on it (a still one has exactly zero velocity).
-    const Eigen::Vector3d n = hit.normal;
     const Eigen::Vector3d u = vel.row(v).transpose() - motion_.velocity(hit.index, p);
-    const double un = u.dot(n);
-    const double removed = std::max(0.0, -un);
-    const Eigen::Vector3d ut = u - un * n;
-    const double t = ut.norm();
-    const double keep = t > hit.friction * removed ? (t - hit.friction * removed) / t : 0.0;
+    const InelasticCoulomb c = inelastic_coulomb(u, hit.normal, hit.friction);
     // Friction acts within the substep: the vertex moves with the tangential speed it keeps,
     // so one held by static friction does not creep down a slope by h^2 g sin(angle) a substep.
-    p -= h * (1.0 - keep) * ut;
+    p -= h * (1.0 - c.keep) * c.ut;
     dx.row(a) = p.transpose() - x.row(v);
-    dv.row(a) = (std::max(un, 0.0) * n + keep * ut - u).transpose();
+    dv.row(a) = (c.after() - u).transpose();
   });
   // Both vertices of a couple in contact: the deeper one's correction moves both (each its own
   // would squash the couple onto the margin).
@@ -273,8 +268,7 @@ Eigen::Vector3d Contacts::supported(int v, Eigen::Vector3d f) const {
   if (s_.p.has_floor && x(v, 2) <= floor_at(v) && f.z() < 0.0) {
     const double normal = -f.z();
     f.z() = 0.0;
-    const double t = std::hypot(f.x(), f.y());
-    const double keep = t > s_.p.friction * normal ? (t - s_.p.friction * normal) / t : 0.0;
+    const double keep = coulomb_keep(std::hypot(f.x(), f.y()), s_.p.friction, normal);
     f.x() *= keep;
     f.y() *= keep;
   }
@@ -285,9 +279,7 @@ Eigen::Vector3d Contacts::supported(int v, Eigen::Vector3d f) const {
     const double fn = f.dot(hit.normal);
     if (fn < 0.0) {
       const Eigen::Vector3d ft = f - fn * hit.normal;
-      const double t = ft.norm();
-      const double keep = t > hit.friction * -fn ? (t - hit.friction * -fn) / t : 0.0;
-      f = keep * ft;
+      f = coulomb_keep(ft.norm(), hit.friction, -fn) * ft;
     }
   }
   return f;

@@ -5,8 +5,10 @@
 /// substep, the substeps contacts need, and the force a contact leaves a resting vertex.
 #include <Eigen/Core>
 
+#include <algorithm>
 #include <cstdint>
 #include <memory>
+#include <utility>
 #include <vector>
 
 #include "colliders.hpp"
@@ -16,6 +18,34 @@
 namespace thinburn {
 
 struct DynamicsParams;
+
+/// @brief Coulomb friction's kept share of a contact's tangential speed t (m/s) when the contact
+/// takes `removed` (m/s, >= 0) of normal speed: t drops by friction * removed, not below 0.
+inline double coulomb_keep(double t, double friction, double removed) {
+  return t > friction * removed ? (t - friction * removed) / t : 0.0;
+}
+
+/// @brief An inelastic contact with Coulomb friction on a velocity u relative to the support
+/// (normal n, unit): its normal speed un, the inward part removed, the tangential velocity ut and
+/// the share keep of it that friction leaves; after() is the velocity the contact leaves.
+struct InelasticCoulomb {
+  Eigen::Vector3d n;
+  double un;
+  double removed;
+  Eigen::Vector3d ut;
+  double keep;
+  Eigen::Vector3d after() const { return std::max(un, 0.0) * n + keep * ut; }
+};
+
+inline InelasticCoulomb inelastic_coulomb(const Eigen::Vector3d& u, const Eigen::Vector3d& n, double friction) {
+  InelasticCoulomb c;
+  c.n = n;
+  c.un = u.dot(n);
+  c.removed = std::max(0.0, -c.un);
+  c.ut = u - c.un * n;
+  c.keep = coulomb_keep(c.ut.norm(), friction, c.removed);
+  return c;
+}
 
 class Contacts {
  public:
@@ -44,6 +74,17 @@ class Contacts {
   /// @brief A step of dt starts: the colliders' velocities over it (ColliderMotion); true once
   /// after each change of the colliders' version (a collider moved).
   bool colliders_moved(double dt);
+  /// @brief What colliders_moved changes: the colliders' motion and the version seen. A step
+  /// that is rolled back puts it back, so the step retried sees the same colliders' move.
+  struct ColliderState {
+    ColliderMotion motion;
+    std::uint64_t version = 0;
+  };
+  ColliderState collider_state() const { return ColliderState{motion_, collider_version_}; }
+  void restore(ColliderState&& s) {
+    motion_ = std::move(s.motion);
+    collider_version_ = s.version;
+  }
 
 
   // The implicit solve's filter (Baraff and Witkin's S): a contact's v_z, and a sticking

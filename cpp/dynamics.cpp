@@ -312,7 +312,7 @@ void LatticeDynamics::set_params(const DynamicsParams& p) {
 
 LatticeDynamics::Checkpoint LatticeDynamics::checkpoint() const {
   return Checkpoint{mass_, strength_, sleep_.awake(), sleep_.hold(), sleep_.hold_len(), vel_, accel_, wind_, bimetal_.grad_dir(), bimetal_.grad_share(),
-                    hist_x_, hist_v_, hist_stamp_, substep_count_, hist_h_};
+                    hist_x_, hist_v_, hist_stamp_, substep_count_, hist_h_, contacts_.collider_state()};
 }
 
 void LatticeDynamics::rollback(Checkpoint&& c) {
@@ -328,6 +328,7 @@ void LatticeDynamics::rollback(Checkpoint&& c) {
   hist_stamp_ = std::move(c.hist_stamp);
   substep_count_ = c.substep_count;
   hist_h_ = c.hist_h;
+  contacts_.restore(std::move(c.colliders));
   refresh_spring_scale();  // also covers a membrane added since the checkpoint
 }
 

@@ -206,6 +206,7 @@ class LatticeDynamics {
     std::vector<std::int64_t> hist_stamp;
     std::int64_t substep_count;
     double hist_h;
+    Contacts::ColliderState colliders;  // the step's start sets the colliders' motion
   };
   Checkpoint checkpoint() const;
   void rollback(Checkpoint&& c);

@@ -1,5 +1,7 @@
 #include "shell_contact.hpp"
 
+#include "contact.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <utility>
@@ -60,15 +62,10 @@ bool ShellContact::push_out(int s, const Colliders& colliders, const ColliderMot
   if (!(W > 0.0)) return false;
   // Inelastic and Coulomb, as a control vertex's contact (Contacts::apply_colliders), on the
   // sample's velocity relative to the collider.
-  const Eigen::Vector3d n = hit.normal;
   u -= motion.velocity(hit.index, p);
-  const double un = u.dot(n);
-  const double removed = std::max(0.0, -un);
-  const Eigen::Vector3d ut = u - un * n;
-  const double t = ut.norm();
-  const double keep = t > hit.friction * removed ? (t - hit.friction * removed) / t : 0.0;
-  const Eigen::Vector3d dp = (margin - hit.distance) * n - h * (1.0 - keep) * ut;
-  const Eigen::Vector3d du = std::max(un, 0.0) * n + keep * ut - u;
+  const InelasticCoulomb c = inelastic_coulomb(u, hit.normal, hit.friction);
+  const Eigen::Vector3d dp = (margin - hit.distance) * c.n - h * (1.0 - c.keep) * c.ut;
+  const Eigen::Vector3d du = c.after() - u;
   for (int k = 0; k < K; ++k) {
     if (share_[k] == 0.0) continue;
     const double f = share_[k] / W;
