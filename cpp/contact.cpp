@@ -162,6 +162,13 @@ bool Contacts::collider_contact(const Eigen::Vector3d& x, ColliderHit& hit) cons
   return hit.distance < collider_margin_ + kSlack;
 }
 
+void Contacts::begin_substep() {
+  if (!colliders_) return;
+  const RowMatX3& x = s_.lattice.positions();
+  if (x_begin_.rows() != x.rows()) x_begin_ = x;
+  for (int v : s_.active) x_begin_.row(v) = x.row(v);
+}
+
 int Contacts::apply_colliders(double h) {
   // Projection after the substep, as apply_floor does for the floor (docs/dynamics.md §3.2).
   // The substep's solve did not know the collider, so the vertex's couple partner moved with it
@@ -190,11 +197,14 @@ int Contacts::apply_colliders(double h) {
     }
     // Normal and friction act on the velocity relative to the collider: a moving box lifts and
     // carries what rests on it (a still one has exactly zero velocity).
-    const Eigen::Vector3d u = vel.row(v).transpose() - motion_.velocity(hit.index, p);
+    const Eigen::Vector3d vc = motion_.velocity(hit.index, p);
+    const Eigen::Vector3d u = vel.row(v).transpose() - vc;
     const InelasticCoulomb c = inelastic_coulomb(u, hit.normal, hit.friction);
-    // Friction acts within the substep: the vertex moves with the tangential speed it keeps,
-    // so one held by static friction does not creep down a slope by h^2 g sin(angle) a substep.
-    p -= h * (1.0 - c.keep) * c.ut;
+    // Friction acts within the substep, on the position: the vertex's move along the collider
+    // since the substep's start (its own, the strain limit's) is held back by up to friction
+    // times the depth pushed out, so one held by static friction does not creep down a slope
+    // by h^2 g sin(angle) a substep.
+    p = positional_friction(p, x_begin_.row(v).transpose() + h * vc, p - x.row(v).transpose(), hit);
     dx.row(a) = p.transpose() - x.row(v);
     dv.row(a) = (c.after() - u).transpose();
   });
@@ -217,7 +227,7 @@ int Contacts::apply_colliders(double h) {
   }
   // Then the points of the shell between the control vertices, which a collider smaller than a
   // control cell passes between (a rod, a table's edge).
-  return shell_ ? shell_->apply(*colliders_, motion_, collider_margin_, h, x, vel, s_.mass, s_.slot) : 0;
+  return shell_ ? shell_->apply(*colliders_, motion_, collider_margin_, h, x_begin_, x, vel, s_.mass, s_.slot) : 0;
 }
 
 int Contacts::contact_substeps(double dt) const {

@@ -47,6 +47,19 @@ inline InelasticCoulomb inelastic_coulomb(const Eigen::Vector3d& u, const Eigen:
   return c;
 }
 
+/// @brief Positional friction (as in position-based dynamics) for a point pushed out of a
+/// collider: p, its position after the push, less its move along the collider since `from`
+/// (where the collider's motion would have carried its start), up to the collider's friction
+/// times the push (the change the push made, along hit.normal).
+inline Eigen::Vector3d positional_friction(const Eigen::Vector3d& p, const Eigen::Vector3d& from,
+                                           const Eigen::Vector3d& push, const ColliderHit& hit) {
+  const Eigen::Vector3d& n = hit.normal;
+  const Eigen::Vector3d moved = p - from;
+  const Eigen::Vector3d slide = moved - moved.dot(n) * n;
+  const double len = slide.norm(), hold = hit.friction * std::max(0.0, push.dot(n));
+  return p - (len <= hold ? 1.0 : hold / len) * slide;
+}
+
 class Contacts {
  public:
   /// @brief State of the lattice these contacts act on, kept by reference (the dynamics owns it).
@@ -113,6 +126,9 @@ class Contacts {
   /// @brief After each substep: project the active vertices below the floor onto it, with
   /// Coulomb friction on what the floor removed.
   void apply_floor(double h);
+  /// @brief A substep starts: keep the active vertices' positions for the colliders'
+  /// positional friction (nothing without colliders).
+  void begin_substep();
   /// @brief After each substep: push the active vertices inside a collider's margin out, then
   /// the shell's samples; returns the samples pushed.
   int apply_colliders(double h);
@@ -136,6 +152,7 @@ class Contacts {
   ColliderMotion motion_;               // the colliders' velocities this step
   std::unique_ptr<ShellContact> shell_;  // the shell's sample points (null: none)
   RowMatX3 x_contact_, v_contact_;      // apply_colliders' per-active-vertex corrections
+  RowMatX3 x_begin_;                    // per vertex: its position at the substep's start (colliders only)
   Eigen::VectorXd contact_;         // per vertex: floor impulse per mass of this substep, -1 if free
   std::vector<std::uint8_t> stick_; // per vertex: a contact held by static friction this substep
   std::vector<int> list_;           // scratch vertex list

@@ -589,6 +589,7 @@ int LatticeDynamics::integrate(double dt, int substeps, StepStats& st) {
   for (;;) {
     const double h = substeps > 0 ? dt / substeps : 0.0;
     for (int k = 0; k < substeps; ++k) {
+      contacts_.begin_substep();
       if (implicit)
         st.cg_iterations += implicit_substep(h);
       else

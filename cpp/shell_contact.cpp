@@ -38,14 +38,15 @@ bool ShellContact::group_may_touch(int g, const Colliders& colliders, double mar
 }
 
 bool ShellContact::push_out(int s, const Colliders& colliders, const ColliderMotion& motion, double margin,
-                            double h, RowMatX3& x, RowMatX3& vel, const Eigen::VectorXd& mass,
-                            const std::vector<int>& slot) {
+                            double h, const RowMatX3& x_begin, RowMatX3& x, RowMatX3& vel,
+                            const Eigen::VectorXd& mass, const std::vector<int>& slot) {
   const int K = s_.stencil;
   const int* v = s_.vertex.data() + std::size_t(s) * K;
   const double* w = s_.weight.data() + std::size_t(s) * K;
-  Eigen::Vector3d p = Eigen::Vector3d::Zero(), u = Eigen::Vector3d::Zero();
+  Eigen::Vector3d p = Eigen::Vector3d::Zero(), p0 = Eigen::Vector3d::Zero(), u = Eigen::Vector3d::Zero();
   for (int k = 0; k < K; ++k) {
     p += w[k] * x.row(v[k]).transpose();
+    p0 += w[k] * x_begin.row(v[k]).transpose();
     u += w[k] * vel.row(v[k]).transpose();
   }
   const ColliderHit hit = colliders.query(p);
@@ -62,9 +63,18 @@ bool ShellContact::push_out(int s, const Colliders& colliders, const ColliderMot
   if (!(W > 0.0)) return false;
   // Inelastic and Coulomb, as a control vertex's contact (Contacts::apply_colliders), on the
   // sample's velocity relative to the collider.
-  u -= motion.velocity(hit.index, p);
+  const Eigen::Vector3d vc = motion.velocity(hit.index, p);
+  u -= vc;
   const InelasticCoulomb c = inelastic_coulomb(u, hit.normal, hit.friction);
-  const Eigen::Vector3d dp = (margin - hit.distance) * c.n - h * (1.0 - c.keep) * c.ut;
+  // Positional friction (as in position-based dynamics): the sample's tangential move over the
+  // substep relative to the collider is held back by up to friction times the depth the push
+  // removes. The move is measured from the substep's start, not taken from the velocity (h u_t,
+  // as a control vertex's contact does): it also holds what the pushes of the samples next to
+  // it, each along its own normal, did to it. On a curved collider those normals differ, and
+  // each push slid its neighbours a little along the surface with no speed to stop: cloth
+  // draped on a sphere crept off it at 2-6 mm/s (docs/dynamics.md §3.2).
+  const Eigen::Vector3d out = (margin - hit.distance) * c.n;
+  const Eigen::Vector3d dp = positional_friction(p + out, p0 + h * vc, out, hit) - p;
   const Eigen::Vector3d du = c.after() - u;
   for (int k = 0; k < K; ++k) {
     if (share_[k] == 0.0) continue;
@@ -76,17 +86,21 @@ bool ShellContact::push_out(int s, const Colliders& colliders, const ColliderMot
 }
 
 int ShellContact::apply(const Colliders& colliders, const ColliderMotion& motion, double margin, double h,
-                        RowMatX3& x, RowMatX3& vel, const Eigen::VectorXd& mass, const std::vector<int>& slot) {
+                        const RowMatX3& x_begin, RowMatX3& x, RowMatX3& vel, const Eigen::VectorXd& mass,
+                        const std::vector<int>& slot) {
   // Serial, in sample order (Gauss-Seidel): samples share vertices, and each one's correction
   // sees its neighbours' (Jacobi, each sample's own correction summed, would move a cell lying
   // on a face by about as many depths as it has samples in contact).
   int moved = 0;
   const int groups = static_cast<int>(s_.group.size()) - 1;
-  for (int g = 0; g < groups; ++g) {
-    if (!group_may_touch(g, colliders, margin, x, slot)) continue;
-    for (int s = s_.group[g]; s < s_.group[g + 1]; ++s)
-      moved += push_out(s, colliders, motion, margin, h, x, vel, mass, slot);
-  }
+  for (int back = 0; back < 2; ++back)
+    for (int i = 0; i < groups; ++i) {
+      const int g = back ? groups - 1 - i : i;
+      if (!group_may_touch(g, colliders, margin, x, slot)) continue;
+      const int first = s_.group[g], last = s_.group[g + 1] - 1;
+      for (int s = first; s <= last; ++s)
+        moved += push_out(back ? first + last - s : s, colliders, motion, margin, h, x_begin, x, vel, mass, slot);
+    }
   return moved;
 }
 

@@ -33,18 +33,23 @@ class ShellContact {
 
   /// @brief After a substep h (after the control vertices' own contacts): each sample closer than
   /// margin to a collider moves out to it along the normal, loses its inward normal speed
-  /// relative to the collider and, by the collider's friction times that, its tangential one.
-  /// Only the vertices with slot[v] >= 0 (integrated this step) move. Returns the samples moved.
+  /// relative to the collider and, by the collider's friction times that, its tangential one;
+  /// its move along the collider since x_begin (the positions at the substep's start) is held
+  /// back by up to the friction times the push. Only the vertices with slot[v] >= 0 (integrated
+  /// this step) move. Returns the samples moved.
   int apply(const Colliders& colliders, const ColliderMotion& motion, double margin, double h,
-            RowMatX3& x, RowMatX3& vel, const Eigen::VectorXd& mass, const std::vector<int>& slot);
+            const RowMatX3& x_begin, RowMatX3& x, RowMatX3& vel, const Eigen::VectorXd& mass,
+            const std::vector<int>& slot);
 
  private:
   bool group_may_touch(int g, const Colliders& colliders, double margin, const RowMatX3& x,
                        const std::vector<int>& slot) const;
   bool push_out(int s, const Colliders& colliders, const ColliderMotion& motion, double margin, double h,
-                RowMatX3& x, RowMatX3& vel, const Eigen::VectorXd& mass, const std::vector<int>& slot);
+                const RowMatX3& x_begin, RowMatX3& x, RowMatX3& vel, const Eigen::VectorXd& mass,
+                const std::vector<int>& slot);
 
   ContactSamples s_;
+  unsigned sweeps_ = 0;        // apply() calls so far: odd ones sweep the samples backwards
   std::vector<double> share_;  // scratch: per stencil vertex, w m^-1 / sum w^2 m^-1
 };
 
