@@ -6,6 +6,7 @@
 #include <Eigen/SVD>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -352,8 +353,76 @@ void Shell::set_colliders(std::shared_ptr<const Colliders> c, double margin, int
     throw std::invalid_argument("samples must be in [0, " + std::to_string(kMaxContactSamples) +
                                 "] per control cell side, got " + std::to_string(samples));
   // Built only with colliders: a scene without any pays nothing.
-  ContactSamples s = c && samples > 0 && !control_ ? contact_samples(samples) : ContactSamples{};
+  ContactSamples s;
+  if (c && samples > 0) s = control_ ? surface_contact_samples(samples) : contact_samples(samples);
   dynamics_->set_colliders(std::move(c), margin, std::move(s));
+}
+
+ContactSamples Shell::surface_contact_samples(int per_cell) const {
+  // A curved shell's samples: mesh vertices about spacing / per_cell apart, each taken with its
+  // own embedding, so a sample is the mesh there. The embedding is the mid-surface's MLS over
+  // the couples plus the rest offset along the layer's normal (the sag of a curve between
+  // couples); that normal turns with the layer, which is not linear in the control vertices. The
+  // couple's axis (top - bottom) is: with n = sum w_c axis_c, the point at rest is
+  // mid + alpha n exactly, alpha = offset / |n|, and the sample sum_c w_c ((1/2 - alpha) bottom_c
+  // + (1/2 + alpha) top_c) is linear and follows the layer's turn to first order.
+  const SurfaceEmbedding& e = surface_vertices_;
+  const int K = SurfaceEmbedding::kStencil;
+  const double spacing = control_->spacing() / per_cell;
+  const std::vector<int> keep = spread_points(e.rest, spacing);
+  const RowMatX3& rest = control_->rest();
+  ContactSamples out;
+  out.stencil = 2 * K;
+  out.spacing = spacing;
+  out.group.push_back(0);
+  for (int i : keep) {
+    const std::size_t at = std::size_t(i) * K;
+    Eigen::Vector3d n = Eigen::Vector3d::Zero();
+    for (int k = 0; k < K; ++k)
+      n += e.weight[at + k] * (rest.row(2 * e.couple[at + k] + 1) - rest.row(2 * e.couple[at + k])).transpose();
+    const double alpha = n.norm() > 0.0 ? e.offset(i) / n.norm() : 0.0;
+    double spread = 0.0;
+    for (int k = 0; k < K; ++k) {
+      const int c = e.couple[at + k];
+      const double wb = e.weight[at + k] * (0.5 - alpha), wt = e.weight[at + k] * (0.5 + alpha);
+      out.vertex.insert(out.vertex.end(), {2 * c, 2 * c + 1});
+      out.weight.insert(out.weight.end(), {wb, wt});
+      spread += std::abs(wb) + std::abs(wt);
+    }
+    out.spread = std::max(out.spread, spread);
+    out.group.push_back(out.size());  // a group each: no two samples share their couples
+  }
+  return out;
+}
+
+std::vector<int> Shell::spread_points(const RowMatX3& points, double spacing) {
+  // Greedy, in the points' order: a point is kept when no kept point lies within `spacing` of
+  // it (found in a hash of spacing-sized cells), so the kept points cover the shell about
+  // `spacing` apart, with none closer.
+  std::map<std::array<long, 3>, std::vector<int>> cells;
+  std::vector<int> keep;
+  const auto cell_of = [&](const Eigen::Vector3d& p) {
+    return std::array<long, 3>{static_cast<long>(std::floor(p.x() / spacing)),
+                               static_cast<long>(std::floor(p.y() / spacing)),
+                               static_cast<long>(std::floor(p.z() / spacing))};
+  };
+  for (int i = 0; i < static_cast<int>(points.rows()); ++i) {
+    const Eigen::Vector3d p = points.row(i).transpose();
+    const std::array<long, 3> c = cell_of(p);
+    bool near = false;
+    for (long a = -1; a <= 1 && !near; ++a)
+      for (long b = -1; b <= 1 && !near; ++b)
+        for (long d = -1; d <= 1 && !near; ++d) {
+          const auto it = cells.find({c[0] + a, c[1] + b, c[2] + d});
+          if (it == cells.end()) continue;
+          for (int j : it->second)
+            if ((points.row(j).transpose() - p).squaredNorm() < spacing * spacing) near = true;
+        }
+    if (near) continue;
+    keep.push_back(i);
+    cells[c].push_back(i);
+  }
+  return keep;
 }
 
 ContactSamples Shell::contact_samples(int per_cell) const {

@@ -109,8 +109,8 @@ class Shell {
   void set_wind_field(const RowMatX3& w) { dynamics_->set_wind_field(w); }
   /// @brief Collision objects for the motion (LatticeDynamics::set_colliders). samples: contact
   /// points per control cell side, in [0, kMaxContactSamples] (0: the control vertices only); a
-  /// grid lattice's, on the sheet's mid-surface where the sheet is (contact_samples). A control
-  /// surface's couples touch alone.
+  /// grid lattice's, on the sheet's mid-surface where the sheet is (contact_samples); a control
+  /// surface's, mesh vertices about a control spacing / samples apart (surface_contact_samples).
   void set_colliders(std::shared_ptr<const Colliders> c, double margin, int samples = 0);
   static constexpr int kMaxContactSamples = 16;
 
@@ -132,6 +132,8 @@ class Shell {
  private:
   RowMatX3 drape() const;
   ContactSamples contact_samples(int per_cell) const;
+  ContactSamples surface_contact_samples(int per_cell) const;  // a control surface's
+  static std::vector<int> spread_points(const RowMatX3& points, double spacing);
   void bilinear_couples(double s, double t, int* couple, double* w) const;
   bool rest_is_flat() const;
   template <class F>

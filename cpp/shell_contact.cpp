@@ -23,18 +23,23 @@ bool ShellContact::group_may_touch(int g, const Colliders& colliders, double mar
                                    const std::vector<int>& slot) const {
   // A sample lies in the convex hull of its vertices (weights >= 0, summing to 1): if the
   // collider is farther than the margin from the whole box of the group's vertices, no sample
-  // of the group touches it. Groups all of whose vertices sleep or are pinned cannot move.
-  const int* v = s_.vertex.data() + std::size_t(s_.group[g]) * s_.stencil;
+  // of the group touches it. With negative weights, p - c = sum w_k (x_k - c) is within
+  // sum |w_k| (the spread) half-diagonals of the box's centre c. Groups all of whose vertices
+  // sleep or are pinned cannot move; unused slots (weight 0) do not count.
+  const std::size_t at = std::size_t(s_.group[g]) * s_.stencil;
+  const int* v = s_.vertex.data() + at;
+  const double* w = s_.weight.data() + at;
   bool awake = false;
-  Eigen::Vector3d lo = x.row(v[0]).transpose(), hi = lo;
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(INFINITY), hi = -lo;
   for (int k = 0; k < s_.stencil; ++k) {
+    if (w[k] == 0.0) continue;
     awake |= slot[v[k]] >= 0;
     lo = lo.cwiseMin(x.row(v[k]).transpose());
     hi = hi.cwiseMax(x.row(v[k]).transpose());
   }
   if (!awake) return false;
   const ColliderHit hit = colliders.query(0.5 * (lo + hi));
-  return hit.distance < margin + kLipschitz * 0.5 * (hi - lo).norm();
+  return hit.distance < margin + kLipschitz * s_.spread * 0.5 * (hi - lo).norm();
 }
 
 bool ShellContact::push_out(int s, const Colliders& colliders, const ColliderMotion& motion, double margin,

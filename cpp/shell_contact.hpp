@@ -17,11 +17,14 @@ namespace thinburn {
 struct ContactSamples {
   int stencil = 0;             ///< control vertices per sample
   std::vector<int> vertex;     ///< size() * stencil control vertex indices
-  std::vector<double> weight;  ///< size() * stencil weights, >= 0, each sample's sum to 1
+  std::vector<double> weight;  ///< size() * stencil weights, each sample's sum to 1 (0: an unused slot)
   /// Samples [group[g], group[g + 1]) have the same vertices (a control cell's stencil): the
   /// convex hull of those vertices holds them all, so one query tells whether any can touch.
   std::vector<int> group;
   double spacing = 0.0;        ///< m between neighbouring samples at rest (the finest feature caught)
+  /// The largest sum of |weight| of a sample: 1 where the weights are >= 0 (a sample then lies
+  /// in its vertices' convex hull); an MLS embedding's negative weights can carry it beyond.
+  double spread = 1.0;
   int size() const { return stencil ? static_cast<int>(vertex.size()) / stencil : 0; }
   bool empty() const { return size() == 0; }
 };

@@ -408,7 +408,8 @@ class Simulation:
         along the collider's normal, loses its inward speed relative to the collider, and
         Coulomb friction (each collider's ``friction`` times that speed) slows it along the
         surface; then so is each of ``samples`` x ``samples`` points of the sheet's mid-surface
-        per control cell (a flat sheet's lattice; 0: the control vertices only), so a collider
+        per control cell (a flat sheet's lattice; a curved shell's: mesh vertices a control
+        spacing / ``samples`` apart; 0: the control vertices only), so a collider
         narrower than a control cell (a rod, a table's edge) does not pass between couples.
         Returns the Colliders in force: move one with ``set_transform`` between steps (the
         sheet wakes, and the move is the collider's velocity over the next step, so a moving
