@@ -227,10 +227,15 @@ void PointGrid::build(const std::vector<int>& points, const RowMatX3& x, double 
   for (;;) {
     k_lo_ = (lo_ / cell_).array().floor().cast<int>();
     n_ = (hi_ / cell_).array().floor().cast<int>() - k_lo_ + 1;
-    if (points.empty() || double(n_(0)) * n_(1) * n_(2) <= most) break;
+    // A non-finite position (a diverged step) puts every point in one cell rather than loop.
+    if (points.empty() || !(lo_.allFinite() && hi_.allFinite()) || double(n_(0)) * n_(1) * n_(2) <= most) break;
     cell_ *= 2.0;
   }
   if (points.empty()) n_.setZero();
+  if (!points.empty() && !(lo_.allFinite() && hi_.allFinite())) {
+    k_lo_.setZero();
+    n_.setOnes();
+  }
   start_.assign(std::size_t(n_.prod()) + 1, 0);
   index_.resize(points.size());
   for (std::size_t q = 0; q < points.size(); ++q) {

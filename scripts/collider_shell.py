@@ -7,6 +7,8 @@ vertices alone, the contact before the samples). The scenes of tests/test_shell_
 - ball: the same square dropped 1 cm onto a 3 cm ball on the floor, off the sample lines, 1 s;
 - edge: the 0.6 x 0.1 m strip of tests/test_colliders.py over a box's edge (4 cm x 0.67 cm
         cells), the edge between two sample columns, 2 s;
+- lantern: the demo lantern (a curved shell, 166 couples) on its side, dropped 2 cm onto a 1 cm
+        rod across its middle, 1.5 s (samples: mesh vertices a control spacing / samples apart);
 - carry: a 0.2 m cloth square resting on a box that moves 0.2 m along x in 1 s (set_transform
         once a frame): how far the sheet went with it; and the same box turning 30 degrees
         about z in 1 s: how far the sheet turned;
@@ -24,7 +26,7 @@ import numpy as np
 
 import thinburn
 from thinburn.colliders import Colliders
-from thinburn.scenes import rect_sheet
+from thinburn.scenes import lantern, rect_sheet
 
 QUIET = dict(speed_noise=0.0, duration_noise=0.0)
 HALF_SAMPLE = 0.5 / 60
@@ -40,11 +42,20 @@ def strip():
     return thinburn.Simulation(*rect_sheet(0.6, 0.1, nx=97, ny=17), cells=32, lattice=16, material="cloth", **QUIET)
 
 
+def lantern_on_its_side():
+    v, f = lantern()
+    v = (v - v.mean(0)) @ np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]]).T
+    v[:, 2] -= v[:, 2].min()
+    return thinburn.Simulation(v, f, cells=40, material="paper", **QUIET)
+
+
 SCENES = {
     "rod": (lambda: square(), dict(boxes=[dict(centre=(0.5 + HALF_SAMPLE, 0.5, -0.025),
                                                half_extents=(0.005, 0.6, 0.005), friction=0.5)]), 1.0),
     "ball": (lambda: square(z=0.04, floor=0.0),
              dict(spheres=[dict(centre=(0.5 + HALF_SAMPLE, 0.5 + HALF_SAMPLE, 0.015), radius=0.015, friction=0.5)]), 1.0),
+    "lantern": (lantern_on_its_side, dict(boxes=[dict(centre=(0.0, 0.0, -0.02), half_extents=(0.005, 0.3, 0.005),
+                                                      friction=0.5)]), 1.5),
     "edge": (strip, dict(boxes=[dict(centre=(-0.145, 0.05, -0.51), half_extents=(0.5, 0.5, 0.5), friction=1.0)]), 2.0),
 }
 
