@@ -167,6 +167,7 @@ void Contacts::begin_substep() {
   const RowMatX3& x = s_.lattice.positions();
   if (x_begin_.rows() != x.rows()) x_begin_ = x;
   for (int v : s_.active) x_begin_.row(v) = x.row(v);
+  if (shell_) shell_->begin_substep(s_.slot);
 }
 
 int Contacts::apply_colliders(double h) {
@@ -230,6 +231,26 @@ int Contacts::apply_colliders(double h) {
   return shell_ ? shell_->apply(*colliders_, motion_, collider_margin_, h, x_begin_, x, vel, s_.mass, s_.slot) : 0;
 }
 
+namespace {
+
+// Substeps of a step dt that keep a contact's fall into a collider per substep, |g| h^2 + s h
+// (s its inward speed), within travel (m): h is the positive root of that quadratic.
+double contact_travel_substeps(double dt, double s, double g, double travel) {
+  const double hmax = g > 0.0 ? (-s + std::sqrt(s * s + 4.0 * g * travel)) / (2.0 * g) : (s > 0.0 ? travel / s : dt);
+  return std::ceil(dt / hmax);
+}
+
+}  // namespace
+
+double Contacts::shortest_spring(int v) const {
+  // Its shortest spring in the sheet's plane (not the couple's own), infinite when it has none.
+  const SpringIncidence& inc = s_.incidence;
+  double L = std::numeric_limits<double>::infinity();
+  for (int q = inc.start[v]; q < inc.start[v + 1]; ++q)
+    if (s_.kind[inc.spring[q]] != 3 && s_.rest_len[inc.spring[q]] > 0.0) L = std::min(L, s_.rest_len[inc.spring[q]]);
+  return L;
+}
+
 int Contacts::contact_substeps(double dt) const {
   // A vertex that may reach a collider this step stops there while its spring neighbours, in the
   // solve, still move: per substep it may fall (s + |g| h) h into it, s its inward speed. That
@@ -239,24 +260,41 @@ int Contacts::contact_substeps(double dt) const {
   constexpr double kContactTravel = 0.1;
   if (!colliders_) return 1;
   const RowMatX3& x = s_.lattice.positions();
-  const SpringIncidence& inc = s_.incidence;
   const double g = s_.p.gravity.norm();
   double need = 1.0;
   for (int v : s_.active) {
     const double speed = s_.vel.row(v).norm();
     const ColliderHit hit = colliders_->query(x.row(v).transpose());
     if (!(hit.distance < collider_margin_ + (speed + g * dt) * dt)) continue;
-    double L = std::numeric_limits<double>::infinity();
-    for (int q = inc.start[v]; q < inc.start[v + 1]; ++q)
-      if (s_.kind[inc.spring[q]] != 3 && s_.rest_len[inc.spring[q]] > 0.0) L = std::min(L, s_.rest_len[inc.spring[q]]);
+    const double L = shortest_spring(v);
     if (!std::isfinite(L)) continue;
-    L *= kContactTravel;
     const double s = std::max(0.0, -s_.vel.row(v).dot(hit.normal));
-    const double hmax = g > 0.0 ? (-s + std::sqrt(s * s + 4.0 * g * L)) / (2.0 * g) : (s > 0.0 ? L / s : dt);
-    need = std::max(need, std::ceil(dt / hmax));
+    need = std::max(need, contact_travel_substeps(dt, s, g, kContactTravel * L));
   }
+  if (shell_)
+    need = std::max(need, shell_->substeps(dt, g, s_.vel, s_.slot, [this](int v) { return shortest_spring(v); }));
   return static_cast<int>(std::min(need, double(s_.p.max_substeps)));
 }
+
+namespace {
+
+// What a support of normal n and Coulomb coefficient mu leaves of force f: nothing of an inward
+// push, and the tangential part only beyond what static friction (mu times the push) takes.
+Eigen::Vector3d held_by(const Eigen::Vector3d& n, double mu, const Eigen::Vector3d& f) {
+  const double fn = f.dot(n);
+  if (!(fn < 0.0)) return f;
+  const Eigen::Vector3d ft = f - fn * n;
+  return coulomb_keep(ft.norm(), mu, -fn) * ft;
+}
+
+// What static friction on that support could still take beyond f's tangential part (-inf when
+// f does not press on it).
+double reserve_on(const Eigen::Vector3d& n, double mu, const Eigen::Vector3d& f) {
+  const double fn = f.dot(n);
+  return fn < 0.0 ? mu * -fn - (f - fn * n).norm() : -std::numeric_limits<double>::infinity();
+}
+
+}  // namespace
 
 double Contacts::friction_reserve(int v, const Eigen::Vector3d& f) const {
   // What static friction could still take beyond f's tangential part: friction times the
@@ -266,10 +304,11 @@ double Contacts::friction_reserve(int v, const Eigen::Vector3d& f) const {
   if (s_.p.has_floor && x(v, 2) <= floor_at(v) && f.z() < 0.0)
     reserve = s_.p.friction * -f.z() - std::hypot(f.x(), f.y());
   ColliderHit hit;
-  if (collider_contact(x.row(v).transpose(), hit)) {
-    const double fn = f.dot(hit.normal);
-    if (fn < 0.0) reserve = std::max(reserve, hit.friction * -fn - (f - fn * hit.normal).norm());
-  }
+  if (collider_contact(x.row(v).transpose(), hit))
+    reserve = std::max(reserve, reserve_on(hit.normal, hit.friction, f));
+  Eigen::Vector3d n;
+  double mu;
+  if (shell_ && shell_->support(v, n, mu)) reserve = std::max(reserve, reserve_on(n, mu, f));
   return reserve;
 }
 
@@ -285,13 +324,12 @@ Eigen::Vector3d Contacts::supported(int v, Eigen::Vector3d f) const {
   // A collider holds a vertex resting on it the same way: the inward push is taken, and static
   // friction takes up to friction times that of the tangential force.
   ColliderHit hit;
-  if (collider_contact(x.row(v).transpose(), hit)) {
-    const double fn = f.dot(hit.normal);
-    if (fn < 0.0) {
-      const Eigen::Vector3d ft = f - fn * hit.normal;
-      f = coulomb_keep(ft.norm(), hit.friction, -fn) * ft;
-    }
-  }
+  if (collider_contact(x.row(v).transpose(), hit)) f = held_by(hit.normal, hit.friction, f);
+  // So do the shell's samples that pushed the vertex out in the last substep that moved it: a
+  // sheet lying on a rod narrower than a control cell rests on it through them alone.
+  Eigen::Vector3d n;
+  double mu;
+  if (shell_ && shell_->support(v, n, mu)) f = held_by(n, mu, f);
   return f;
 }
 

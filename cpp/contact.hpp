@@ -143,6 +143,7 @@ class Contacts {
 
  private:
   bool collider_contact(const Eigen::Vector3d& x, ColliderHit& hit) const;
+  double shortest_spring(int v) const;
 
   View s_;
   Eigen::VectorXd floor_offset_;  // per vertex, empty: none

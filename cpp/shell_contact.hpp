@@ -6,6 +6,8 @@
 /// normal by the smallest mass-weighted change of the control vertices that carry it.
 #include <Eigen/Core>
 
+#include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "colliders.hpp"
@@ -44,16 +46,38 @@ class ShellContact {
             const RowMatX3& x_begin, RowMatX3& x, RowMatX3& vel, const Eigen::VectorXd& mass,
             const std::vector<int>& slot);
 
+  /// @brief Substeps of a step dt (>= 1) that the stencils the samples held in the last substep
+  /// need: the solve does not know the collider, so the whole sheet falls in it, and the push
+  /// back moves only the stencils in contact, which strains their springs to the rest by the fall
+  /// over their length. shortest(v) is vertex v's shortest spring in the sheet's plane.
+  double substeps(double dt, double g, const RowMatX3& vel, const std::vector<int>& slot,
+                  const std::function<double(int)>& shortest) const;
+  /// @brief A substep starts: forget the supports of the vertices it moves (slot[v] >= 0); a
+  /// sleeper keeps the one it fell asleep on.
+  void begin_substep(const std::vector<int>& slot);
+  /// @brief Whether the samples held control vertex v up in the last substep that moved it; if
+  /// so, the mean normal of those pushes (weighted by v's share of each) and the largest
+  /// friction among their colliders, for sleeping (Contacts::supported).
+  bool support(int v, Eigen::Vector3d& normal, double& friction) const;
+
  private:
   bool group_may_touch(int g, const Colliders& colliders, double margin, const RowMatX3& x,
                        const std::vector<int>& slot) const;
   bool push_out(int s, const Colliders& colliders, const ColliderMotion& motion, double margin, double h,
                 const RowMatX3& x_begin, RowMatX3& x, RowMatX3& vel, const Eigen::VectorXd& mass,
                 const std::vector<int>& slot);
+  void hold(int v, const Eigen::Vector3d& push, double friction);
 
   ContactSamples s_;
   unsigned sweeps_ = 0;        // apply() calls so far: odd ones sweep the samples backwards
   std::vector<double> share_;  // scratch: per stencil vertex, w m^-1 / sum w^2 m^-1
+  // Per control vertex (sized on the first apply): the sum of its share of each push times the
+  // push's depth along the push's normal, and the largest friction of those pushes; valid where
+  // listed_. support_list_ holds the listed vertices, so a substep forgets them in O(listed).
+  RowMatX3 support_;
+  std::vector<double> support_friction_;
+  std::vector<std::uint8_t> listed_;
+  std::vector<int> support_list_;
 };
 
 }  // namespace thinburn

@@ -108,11 +108,12 @@ def test_a_strip_draped_over_a_box_edge_cuts_the_corner_less():
         depth[samples] = worst_over(sim, col, 2.0)
     hem = sim.vertex_positions()[:, 2].min()
     # Measured: the mesh 8.74 mm inside the box at the edge with the control vertices alone;
-    # 0.76 mm with the samples (the chord between two samples 1 cm apart across a right angle:
-    # docs/dynamics.md §3.2; 1.15 mm before the samples' positional friction and symmetric
-    # sweeps; 8 a side keep it 0.59 mm outside); the hem 0.250 m down.
+    # 1.15 mm with the samples (the chord between two samples 1 cm apart across a right angle:
+    # docs/dynamics.md §3.2; 0.76 mm with the substeps the redo rule chose before the samples
+    # had their own, 1.15 mm also before the samples' positional friction and symmetric sweeps;
+    # 8 a side keep it 0.59 mm outside); the hem 0.250 m down.
     assert depth[0] < -0.007
-    assert depth[4] > -0.9e-3
+    assert depth[4] > -1.25e-3
     assert hem < -0.24
 
 
@@ -144,7 +145,8 @@ def test_a_lantern_dropped_on_a_thin_rod_hangs_on_it():
     # its side and falls 2 cm onto a 1 cm rod across its middle. Measured (1.5 s): with the
     # couples alone the rod passes between them and the lantern falls on (lowest vertex 0.76 m
     # down, the mesh 4.9 mm inside the rod on the way); with the samples no mesh vertex comes
-    # nearer the rod than 3.82 mm and the lowest hangs 31 mm below its top.
+    # nearer the rod than 3.96 mm and the lowest hangs 26.3 mm below its top (38 substeps a
+    # step). That sag is not converged in dt: 21.9 mm at 50 substeps, 35.5 at 200.
     v, f = lantern()
     turn = np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]])
     v = (v - v.mean(0)) @ turn.T
@@ -158,7 +160,7 @@ def test_a_lantern_dropped_on_a_thin_rod_hangs_on_it():
         low[samples] = sim.vertex_positions()[:, 2].min()
     assert worst[0] < -0.004 and low[0] < -0.5
     assert worst[4] > 3.5e-3
-    assert -0.04 < low[4] < -0.02
+    assert -0.04 < low[4] < -0.015
 
 
 def test_samples_are_checked():
