@@ -143,10 +143,13 @@ def simulation_for(spec: SceneSpec, values: dict, threads: int = 1):
     material = spec.resolved_material(mat_changes)
     params = {**spec.params, **values}
     pinned = None if spec.pinned is None else np.asarray(spec.pinned)
+    maps = {k: np.asarray(spec.maps[k]) for k in ("speed_map", "fuel_map") if k in spec.maps}
     sim = Simulation(spec.vertices, spec.faces, material=material,
                      cells=int(bake.get("cells", spec.cells)), seed=int(bake.get("seed", spec.seed)),
                      threads=threads, front=spec.front, lattice=spec.lattice, pinned=pinned,
-                     floor=spec.floor, integrator=spec.integrator, shell=bool(spec.shell), **params)
+                     floor=spec.floor, integrator=spec.integrator, shell=bool(spec.shell),
+                     heat_ignites=spec.heat_ignites, finish_within=spec.finish_within,
+                     **maps, **params)
     fps = float(bake.get("fps", spec.fps))
     frames = int(bake.get("frames", spec.frames))
     if fps <= 0 or frames < 1:
@@ -156,26 +159,19 @@ def simulation_for(spec: SceneSpec, values: dict, threads: int = 1):
 
 def run_frames(sim, spec: SceneSpec, fps: float, frames: int, on_frame=None) -> None:
     """Drive a Simulation through the scene's frames as the add-on's bake does: at frame k
-    light the igniters due in [k dt, (k+1) dt), record (``on_frame(k, sim)``), step (not after
-    the last frame)."""
+    light what is due in [k dt, (k+1) dt) (``scene_run.SceneRun``), record (``on_frame(k,
+    sim)``), set the frame's flames, colliders, wind and motion, step (not after the last
+    frame)."""
+    from .scene_run import SceneRun
+
+    run = SceneRun(spec, fps, frames)
     dt = 1.0 / fps
-    igniters = sorted(spec.igniters, key=lambda g: g["time"])
-    nxt = 0
     for k in range(frames):
-        end = (k + 1) * dt
-        while nxt < len(igniters) and igniters[nxt]["time"] < end:
-            g = igniters[nxt]
-            try:
-                sim.ignite(g["point"], time=max(g["time"], sim.time), radius=g["radius"])
-            except ValueError as exc:
-                if "point" not in str(exc):
-                    raise
-                # An igniter off the sheet lights nothing, as in the add-on.
-            nxt += 1
+        run.before_record(sim, k)
         if on_frame is not None:
             on_frame(k, sim)
         if k < frames - 1:
-            sim.wind = spec.wind_at(k)
+            run.before_step(sim, k)
             sim.step(dt)
 
 
