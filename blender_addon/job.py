@@ -182,7 +182,8 @@ class BakeJob:
         self.cache_step = self.sheets[0].cache_step
         self.n_vertices = len(world)
         self.inverse = np.linalg.inv(self.matrix)
-        # Igniter paths are sampled half a cell apart: an estimate until the core says.
+        # Igniter paths are sampled half a cell apart: an estimate until the core says (the
+        # frames are sampled once it has: _await_shape).
         self.spacing = 0.5 * inputs.cell_spacing(world, tris, settings.cells)
         self.lattice = int(settings.lattice)
         self.max_strain = self.max_strain_frame = None  # set when a moving bake finishes
@@ -324,12 +325,14 @@ class BakeJob:
     # --- driving -----------------------------------------------------------------------------
     def tick(self, budget_s: float = 0.05) -> bool:
         """Sample ahead, hand frames to the worker, store what came back. True when finished."""
-        self._sample_ahead(_time.perf_counter() + budget_s)
+        if self._await_shape(block=False):
+            self._sample_ahead(_time.perf_counter() + budget_s)
         self._drain(block=False)
         return self.finished
 
     def run(self, progress=None) -> None:
         """Bake to the end (background mode); ``progress(self)`` after each frame, if given."""
+        self._await_shape(block=True)
         while not self.finished:
             self._sample_ahead(_time.perf_counter() + 1.0)
             self._drain(block=True)
@@ -472,6 +475,31 @@ class BakeJob:
         pos, strength, radius = igniter
         return moving.to_bake(F, pos[None, :])[0], strength, radius
 
+    def _await_shape(self, block: bool) -> bool:
+        """Whether the core has said what it made of the sheet (its "built" message, taken
+        here). Frames are sampled only after it: igniter paths and mesh igniters are sampled
+        with the core's cell spacing from the first frame on, so that every bake of a scene
+        (UI, headless, a scene file's) samples alike, however fast the machine."""
+        while self.shape is None and not self.finished:
+            try:
+                msg = self.worker.results.get(block=block, timeout=60.0 if block else None)
+            except queue.Empty:
+                if block and not self.worker.is_alive():
+                    self._fail("the bake thread stopped without a result")
+                if not block:
+                    return False
+                continue
+            if msg[0] == "built":
+                self._built(msg[1])
+            elif msg[0] == "error":
+                self._fail(explain_core_error(msg[1], self.lattice))
+        return self.shape is not None
+
+    def _built(self, shape: dict) -> None:
+        self.shape = shape
+        if shape["spacing"] > 0:
+            self.spacing = 0.5 * shape["spacing"]
+
     def _drain(self, block: bool) -> None:
         while not self.finished:
             try:
@@ -482,9 +510,7 @@ class BakeJob:
                 return
             kind = msg[0]
             if kind == "built":
-                self.shape = msg[1]
-                if self.shape["spacing"] > 0:
-                    self.spacing = 0.5 * self.shape["spacing"]
+                self._built(msg[1])
             elif kind == "frame":
                 _, index, positions, lit, particles = msg
                 if self.stretch is not None:

@@ -1,30 +1,243 @@
 """A sheet's bake inputs as a thinburn scene file (thinburn.scenefile), for wedges and farms.
 
 ``write_scene(obj, path)`` or ``bpy.ops.thinburn.export_scene(filepath=...)`` on the active
-sheet samples the scene at every frame of the bake's range, as the bake does, and writes the
-world-space mesh at the first frame, the material, the settings, the wind per frame and the
-igniters as timed ignitions (a lit igniter's position at each frame, and along its path
-between frames, the same points the bake lights; repeated ones are kept once, earliest).
-Keyframed motion parameters are written with their first frame's values.
-``python -m thinburn wedge --scene FILE --param ...`` then bakes it outside Blender.
+sheet samples the scene at every frame of the bake's range, as the bake does (job.BakeJob),
+and writes what the core is given: the world-space mesh at the first frame (lifted onto its
+Floor object as the bake lifts it), the material, the settings (Heat Ignites, Burn Duration),
+the painted maps, and per frame each lit igniter's ignitions (an Empty's position and its path
+to the next frame, a mesh igniter's surface points, the Flames), the collision objects' poses
+and friction, the wind, the keyframed motion parameters and gravity. A sheet whose transform
+is animated is written in the bake frame (moving.py), with each frame's map to the world.
+What a scene file cannot hold is said, one ``ExportWarning`` per setting (the operator
+reports them): the other sheets of a Heat Ignites group, wind that varies across the sheet, a
+collision object that changes shape. ``python -m thinburn wedge --scene FILE --param ...``
+then bakes it outside Blender.
 """
 from __future__ import annotations
+
+import warnings
 
 import bpy
 import numpy as np
 from bpy.props import StringProperty
 
-from . import inputs, properties
+from . import fields, inputs, moving, properties
 from .file_export import ExportOperator, registrar
 from .inputs import BakeError
-from .job import core_supports
+from .job import _check_floor, core_supports
 from .worker import path_ignitions
 
 
-def scene_spec(obj, context=None):
-    """A thinburn.scenefile.SceneSpec of the sheet's bake inputs."""
+class ExportWarning(UserWarning):
+    """A bake input the scene file cannot hold: the text names the setting."""
+
+
+def _checked_kinds(obj, settings, shell: bool, flames: list) -> None:
+    """The bake's refusals (job.BakeJob._simulation_kwargs), in its words."""
+    if flames and not shell:
+        raise BakeError(f"the Flame igniter {', '.join(repr(n) for n in flames)} burns as "
+                        "fire particles, which need Crumple on: tick Crumple, or set its Kind "
+                        "to Lights What It Touches")
+    if settings.heat_ignites and not shell:
+        raise BakeError("Heat Ignites needs Crumple on (the heat comes from the fire's "
+                        "particles): tick Crumple, or untick Heat Ignites")
+
+
+def _maps(obj, settings, frames: list) -> tuple:
+    """({map name: (n,) values}, ignite frame index or None) as the bake reads them."""
+    maps = {}
+    for key in ("speed_map", "fuel_map", "ignite_map"):
+        values = inputs.vertex_map(obj, settings, key)
+        if values is not None:
+            maps[key] = values
+    if "ignite_map" not in maps:
+        return maps, None
+    if not frames[0] <= settings.ignite_frame <= frames[-1]:
+        raise BakeError(f"Ignite Frame {settings.ignite_frame} is outside the bake's frames "
+                        f"{frames[0]}–{frames[-1]}: set it in Physics > ThinBurn > Painted")
+    return maps, settings.ignite_frame - frames[0]
+
+
+def _base_spec(obj, context, frames: list, fps: float, shell: bool):
+    """The SceneSpec of what the bake reads once, at its first frame (the scene is there)."""
     from thinburn.scenefile import SceneSpec
 
+    settings = obj.thinburn
+    world, tris, matrix = inputs.sheet_geometry(obj)
+    floor = inputs.floor_height(context.scene, settings)
+    _check_floor(obj, world, floor, settings)
+    pinned = (np.flatnonzero(inputs.pin_mask(obj, settings.pin_group)).tolist()
+              if settings.pin_group else None)
+    params = {key: float(getattr(settings, key)) for key in properties.MODEL_PARAMS}
+    if shell:
+        params.update(inputs.dynamics(context.scene, settings))
+    maps, ignite_frame = _maps(obj, settings, frames)
+    mat = properties.build_material(settings).as_dict()
+    mat.pop("name", None)
+    spec = SceneSpec(world, tris, material={"preset": settings.material, **mat}, name=obj.name,
+                     cells=int(settings.cells), fps=float(fps), frames=len(frames),
+                     seed=int(settings.seed), front=settings.front,
+                     lattice=(int(settings.lattice) or None) if shell else None, floor=floor,
+                     pinned=pinned, integrator=settings.integrator, shell=shell, params=params,
+                     heat_ignites=bool(settings.heat_ignites and shell),
+                     finish_within=float(settings.burn_duration) if settings.burn_duration > 0 else None,
+                     ignite_frame=ignite_frame, maps={k: v.tolist() for k, v in maps.items()})
+    return spec, matrix
+
+
+def _core_spacing(spec, estimate: float) -> float:
+    """Half the core's cell spacing, as the bake samples igniter paths and mesh igniters once
+    the core has said it (job.BakeJob waits for it): the same Simulation, built here."""
+    from thinburn.wedge import simulation_for
+
+    sim = simulation_for(spec, {})[0]
+    spacing = float(getattr(sim, "cell_spacing", 0.0))
+    return 0.5 * spacing if spacing > 0 else estimate
+
+
+def _colliders(context, obj, shell: bool) -> list:
+    """The collision objects the bake uses (job.BakeJob: the Floor Object's and open meshes'
+    Collision left out), warning for those it leaves out."""
+    if not shell:
+        return []
+    settings = obj.thinburn
+    floor = settings.floor_object if settings.floor_mode == "OBJECT" else None
+    depsgraph = context.evaluated_depsgraph_get()
+    kept = []
+    for name in inputs.collision_objects(context.view_layer, obj.name):
+        if floor is not None and name == floor.name:
+            continue  # the sheet rests on the Floor: the bake uses that alone
+        if inputs.closed_mesh(inputs.collider_sample(bpy.data.objects[name], depsgraph)["faces"]):
+            kept.append(name)
+        else:
+            warnings.warn(f"Collision '{name}' is not a closed mesh: the bake ignores it, and so "
+                          "does the scene file", ExportWarning, stacklevel=3)
+    return kept
+
+
+class FrameRecorder:
+    """Samples every frame of a sheet's bake (inputs.sample_frame, as job.BakeJob does) and
+    turns it into the scene file's per-frame inputs, in the bake frame."""
+
+    def __init__(self, context, obj, frames: list, spacing: float, colliders: list, m0):
+        self.context, self.obj, self.frames = context, obj, frames
+        self.spacing, self.collider_names = spacing, colliders
+        self.inverse = np.linalg.inv(m0)
+        settings = obj.thinburn
+        self.igniters = inputs.igniter_objects(obj, settings)
+        self.flames = inputs.flame_igniters(self.igniters)
+        self.winds = inputs.wind_objects(context.view_layer)
+        self.samples, self.maps, self.collider_samples = [], [], []
+
+    def sample(self, floor) -> None:
+        scene = self.context.scene
+        for frame in self.frames:
+            s = inputs.sample_frame(scene, frame, self.obj.name, self.igniters, self.winds, self.spacing)
+            F = moving.frame_map(s.matrix, self.inverse)
+            if floor is not None and not moving.keeps_floor(F):
+                what = inputs.transform_animation(self.obj) or "its transform changes"
+                raise BakeError(inputs.floor_motion_error(self.obj.name, what, frame))
+            depsgraph = self.context.evaluated_depsgraph_get()
+            self.collider_samples.append([inputs.collider_sample(bpy.data.objects[n], depsgraph)
+                                          for n in self.collider_names])
+            self.samples.append(s)
+            self.maps.append(F)
+
+    def ignitions(self, dt: float) -> list:
+        """Every frame's Empty ignitions, as job.BakeJob._task makes them, in its order."""
+        out = []
+        for k, here in enumerate(self.samples):
+            last = k + 1 == len(self.samples)
+            for i, start in enumerate(here.igniters):
+                start = _in_bake_frame(start, self.maps[k])
+                end = None if last else _in_bake_frame(self.samples[k + 1].igniters[i], self.maps[k + 1])
+                for point, t, radius in path_ignitions(start, end, k * dt, dt, max(self.spacing, 0.5 * start[2])):
+                    out.append({"point": [float(x) for x in point], "time": float(t), "radius": float(radius)})
+        return out
+
+    def surfaces(self, dt: float) -> list:
+        return [{"points": moving.to_bake(F, pts), "radius": max(float(radius), self.spacing), "time": k * dt}
+                for k, (s, F) in enumerate(zip(self.samples, self.maps)) for pts, radius in (s.surfaces or [])]
+
+    def flame_rows(self):
+        if not self.flames:
+            return None
+        out = []
+        for s, F in zip(self.samples, self.maps):
+            lit = s.flames or []
+            pts = moving.to_bake(F, np.array([p for p, _ in lit], dtype=np.float64).reshape(-1, 3))
+            out.append(np.column_stack([pts, [w for _, w in lit]]).reshape(-1, 4))
+        return out
+
+    def dynamics(self, params: dict):
+        """Per frame the motion parameters with gravity in the bake frame, or None when every
+        frame has those the Simulation is built with (``params``)."""
+        rows = []
+        for s, F in zip(self.samples, self.maps):
+            now = dict(s.dynamics)
+            now["gravity"] = [float(g) for g in moving.direction_to_bake(F, now["gravity"])]
+            rows.append(now)
+        base = {k: (list(v) if k == "gravity" else v) for k, v in params.items() if k in rows[0]}
+        return rows if any(r != base for r in rows) else None
+
+    def wind(self, centre: np.ndarray) -> list:
+        """Per frame the wind at the sheet's centre at Start, turned into the bake frame."""
+        return [moving.direction_to_bake(F, s.wind_at(moving.to_world(F, centre[None]))[0]).tolist()
+                for s, F in zip(self.samples, self.maps)]
+
+    def collider_specs(self) -> list:
+        out = []
+        for i, name in enumerate(self.collider_names):
+            track = [frame[i] for frame in self.collider_samples]
+            first = track[0]
+            if any(not (np.array_equal(c["vertices"], first["vertices"]) and
+                        np.array_equal(c["faces"], first["faces"])) for c in track):
+                warnings.warn(f"Collision '{name}' changes shape during the bake: the scene file "
+                              "holds its shape at Start (its pose and Friction per frame)",
+                              ExportWarning, stacklevel=3)
+            poses = [_pose_in_bake_frame(c, F) for c, F in zip(track, self.maps)]
+            out.append({"name": name, "vertices": first["vertices"], "faces": first["faces"],
+                        "thickness": first["thickness"], "friction": [c["friction"] for c in track],
+                        "rotation": [r for r, _ in poses], "translation": [t for _, t in poses]})
+        return out
+
+
+def _in_bake_frame(igniter, F):
+    pos, strength, radius = igniter
+    return moving.to_bake(F, pos[None, :])[0], strength, radius
+
+
+def _pose_in_bake_frame(c: dict, F) -> tuple:
+    """A collider's pose taken from the world into the bake frame (job.BakeJob._collider_task)."""
+    inv = np.linalg.inv(F)
+    return inv[:3, :3] @ c["rotation"], inv[:3, :3] @ c["translation"] + inv[:3, 3]
+
+
+def _warn_wind(recorder: FrameRecorder, world: np.ndarray) -> None:
+    """The scene file has one wind per frame: say so for each field whose wind varies across
+    the sheet (its falloff, noise or shape), which the bake blows per lattice vertex."""
+    for i, name in enumerate(recorder.winds):
+        for s, F in zip(recorder.samples, recorder.maps):
+            w = fields.wind_at([s.fields[i]], moving.to_world(F, world), s.frame)
+            if np.ptp(w, axis=0).max() > 1e-9:
+                warnings.warn(f"Wind '{name}' varies across the sheet (its falloff, noise or "
+                              "shape): the scene file holds one wind per frame, at the sheet's "
+                              "centre", ExportWarning, stacklevel=3)
+                break
+
+
+def _warn_group(scene, obj) -> None:
+    group = inputs.heat_group(scene, obj)
+    if len(group) > 1:
+        others = ", ".join(repr(n) for n in group[1:])
+        warnings.warn(f"'{obj.name}' bakes together with {others} (Heat Ignites: close enough to "
+                      f"heat each other): the scene file holds '{obj.name}' alone", ExportWarning,
+                      stacklevel=3)
+
+
+def scene_spec(obj, context=None):
+    """A thinburn.scenefile.SceneSpec of the sheet's bake inputs; ExportWarning for each input
+    it cannot hold."""
     context = context or bpy.context
     scene = context.scene
     if obj is None or obj.type != "MESH":
@@ -35,44 +248,29 @@ def scene_spec(obj, context=None):
     frames = list(range(settings.frame_start, settings.frame_end + 1))
     fps = scene.render.fps / scene.render.fps_base
     dt = 1.0 / fps
-    igniters = inputs.igniter_objects(obj, settings)
-    winds = inputs.wind_objects(context.view_layer)
+    shell = bool(settings.crumple and core_supports("shell"))
     restore = scene.frame_current
     try:
         scene.frame_set(frames[0])
-        world, tris, _ = inputs.sheet_geometry(obj)
-        floor = inputs.floor_height(scene, settings)
-        pinned = (np.flatnonzero(inputs.pin_mask(obj, settings.pin_group)).tolist()
-                  if settings.pin_group else None)
-        shell = bool(settings.crumple and core_supports("shell"))
-        params = {key: float(getattr(settings, key)) for key in properties.MODEL_PARAMS}
-        if shell:
-            params.update(inputs.dynamics(scene, settings))
-        spacing = 0.5 * inputs.cell_spacing(world, tris, settings.cells)
-        samples = [inputs.sample_frame(scene, f, obj.name, igniters, winds) for f in frames]
-        centre = world.mean(axis=0)  # a scene file has one wind per frame: the fields' here
+        _warn_group(scene, obj)
+        _checked_kinds(obj, settings, shell, inputs.flame_igniters(inputs.igniter_objects(obj, settings)))
+        spec, m0 = _base_spec(obj, context, frames, fps, shell)
+        spacing = _core_spacing(spec, 0.5 * inputs.cell_spacing(spec.vertices, spec.faces, settings.cells))
+        recorder = FrameRecorder(context, obj, frames, spacing, _colliders(context, obj, shell), m0)
+        recorder.sample(spec.floor)
     finally:
         scene.frame_set(restore)
-    ignitions, seen = [], set()
-    for k, here in enumerate(samples):
-        there = samples[k + 1] if k + 1 < len(samples) else None
-        for i, start in enumerate(here.igniters):
-            end = None if there is None else there.igniters[i]
-            for point, t, radius in path_ignitions(start, end, k * dt, dt,
-                                                   max(spacing, 0.5 * start[2])):
-                key = (tuple(np.round(point, 9)), round(float(radius), 9))
-                if key not in seen:
-                    seen.add(key)
-                    ignitions.append({"point": [float(x) for x in point], "time": float(t),
-                                      "radius": float(radius)})
-    mat = properties.build_material(settings).as_dict()
-    mat.pop("name", None)
-    return SceneSpec(world, tris, material={"preset": settings.material, **mat},
-                     igniters=ignitions, name=obj.name, cells=int(settings.cells), fps=float(fps),
-                     frames=len(frames), seed=int(settings.seed), front=settings.front,
-                     lattice=(int(settings.lattice) or None) if shell else None, floor=floor,
-                     pinned=pinned, integrator=settings.integrator, shell=shell,
-                     wind=[s.wind_at(centre)[0].tolist() for s in samples], params=params)
+    _warn_wind(recorder, spec.vertices)
+    spec.igniters = recorder.ignitions(dt)
+    spec.surfaces = recorder.surfaces(dt)
+    spec.flames = recorder.flame_rows()
+    spec.dynamics = recorder.dynamics(spec.params) if shell else None
+    spec.wind = recorder.wind(spec.vertices.mean(axis=0))
+    spec.wind_field = bool(shell and recorder.winds)
+    spec.colliders = recorder.collider_specs()
+    moves = any(not np.array_equal(F, np.eye(4)) for F in recorder.maps)
+    spec.to_world = [F.tolist() for F in recorder.maps] if moves else None
+    return spec
 
 
 def write_scene(obj, path, context=None) -> str:
@@ -101,7 +299,11 @@ class THINBURN_OT_export_scene(ExportOperator, bpy.types.Operator):
     errors = (BakeError, ValueError, OSError)
 
     def write(self, context, path):
-        write_scene(context.active_object, path, context)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", ExportWarning)
+            write_scene(context.active_object, path, context)
+        for w in caught:
+            self.report({"WARNING"}, f"ThinBurn: {w.message}")
 
 
 register, unregister = registrar(THINBURN_OT_export_scene)
