@@ -158,3 +158,21 @@ def test_run_frames_applies_every_field_in_the_bakes_order(tmp_path):
     lit = np.isfinite(sim.vertex_ignition_times())
     assert lit[-1] and lit[0] and lit[10]  # the ignite map's vertex, the igniter's and the surface's corner
     assert json.loads(json.dumps(spec.to_dict())) == spec.to_dict()
+
+
+def test_a_wedge_of_a_moving_sheet_writes_world_positions(tmp_path, capsys):
+    """to_world carries the bake frame along (here 1 cm along x per frame): frames.npz holds
+    the simulated positions moved by it, to float32 rounding of the same doubles (exact)."""
+    from thinburn.__main__ import main
+    spec = _v2_spec()
+    spec.to_world = [[[1, 0, 0, 0.01 * k], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]] for k in range(FRAMES)]
+    path = scenefile.save_scene(spec, tmp_path / "moving.json")
+    assert main(["wedge", "--scene", str(path), "--workers", "0", "--out", str(tmp_path / "w"),
+                 "--param", "seed=0", "--render-frames", "0"]) == 0
+    with np.load(tmp_path / "w" / "seed-0" / "frames.npz") as d:
+        got = d["vertex_positions"]
+    spec = scenefile.load_scene(path)
+    sim, _, fps, frames = wedge.simulation_for(spec, {})
+    want = []
+    wedge.run_frames(sim, spec, fps, frames, lambda k, s: want.append(s.vertex_positions() + [0.01 * k, 0, 0]))
+    np.testing.assert_array_equal(got, np.asarray(want, dtype=np.float32))

@@ -118,6 +118,15 @@ class SceneSpec:
             return tuple(w[min(k, len(w) - 1)])
         return tuple(w)
 
+    def in_world(self, k: int, points) -> np.ndarray:
+        """(n, 3) points of frame k from the bake frame to the world (``to_world``; the same
+        points when the sheet does not move)."""
+        p = np.asarray(points, dtype=np.float64)
+        if not self.to_world:
+            return p
+        F = np.asarray(self.to_world[min(k, len(self.to_world) - 1)], dtype=np.float64)
+        return p @ F[:3, :3].T + F[:3, 3]
+
     def version(self) -> int:
         """1 when the scene uses nothing a version-1 reader lacks, else 2."""
         new = any(getattr(self, k) for k in V2_FIELDS)

@@ -190,10 +190,13 @@ def _bake(scene, values, folder, render_frames, key, label, usd) -> dict:
     aspect = dv / du
 
     def record(k, s):
+        # In the world: a moving sheet's scene is simulated in its bake frame (to_world).
+        positions = spec.in_world(k, s.vertex_positions())
         store["time"].append(s.time)
-        store["vertex_positions"].append(s.vertex_positions().astype(np.float32))
+        store["vertex_positions"].append(positions.astype(np.float32))
         store["vertex_char"].append(s.vertex_char().astype(np.float32))
         p, t = s.particles() if spec.shell else (np.zeros((0, 3)), np.zeros(0))
+        p = spec.in_world(k, np.asarray(p).reshape(-1, 3))
         particles.append(np.column_stack([p, t]).astype(np.float32))
         if k in render_frames:
             states = s.cell_states()
@@ -201,7 +204,7 @@ def _bake(scene, values, folder, render_frames, key, label, usd) -> dict:
             vstate = np.where(s.time < ign, 0, np.where(s.time < out, 1, 2)).astype(np.uint8)
             cells = render.cell_image(states, s.cell_char(), s.inside(), spec.material_name(),
                                       aspect, width=120)
-            pictures.append(renderer.frame(s.vertex_positions(), s.vertex_char(), vstate, cells,
+            pictures.append(renderer.frame(positions, s.vertex_char(), vstate, cells,
                                            (p, t), title=f"t = {s.time:5.2f} s"))
 
     try:

@@ -166,12 +166,18 @@ def test_what_a_scene_file_cannot_hold_is_said(addon, tmp_path):
     gust = bpy.context.active_object
     gust.name = "Gust"
     gust.field.noise = 2.0
+    # A collision object that swells (a keyframed Displace): the file holds one shape.
+    blob = _cube((0.0, 0.0, -0.2), (0.1, 0.1, 0.1), "Blob")
+    blob.modifiers.new("Swell", "DISPLACE")
+    _keyframe(blob, 'modifiers["Swell"].strength', {1: 0.0, 6: 0.5})
+    blob.modifiers.new("Collision", "COLLISION")
     bpy.context.view_layer.objects.active = sheet
     with pytest.warns(addon.scene_export.ExportWarning) as caught:
         addon.scene_export.write_scene(sheet, str(tmp_path / "scene.json"))
     texts = [str(w.message) for w in caught]
     assert any("Wind 'Gust' varies across the sheet" in t for t in texts), texts
     assert any("bakes together with 'Other'" in t and "holds 'Sheet' alone" in t for t in texts), texts
+    assert any("Collision 'Blob' changes shape during the bake" in t for t in texts), texts
     # The operator writes the file and reports the same lines as warnings.
     assert bpy.ops.thinburn.export_scene(filepath=str(tmp_path / "op.json")) == {"FINISHED"}
     assert (tmp_path / "op.json").exists()
