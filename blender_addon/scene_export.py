@@ -21,41 +21,23 @@ import bpy
 import numpy as np
 from bpy.props import StringProperty
 
-from . import fields, inputs, moving, properties
+from . import fields, inputs, job, moving, properties
 from .file_export import ExportOperator, registrar
 from .inputs import BakeError
-from .job import _check_floor, core_supports
-from .worker import path_ignitions
 
 
 class ExportWarning(UserWarning):
     """A bake input the scene file cannot hold: the text names the setting."""
 
 
-def _checked_kinds(obj, settings, shell: bool, flames: list) -> None:
-    """The bake's refusals (job.BakeJob._simulation_kwargs), in its words."""
-    if flames and not shell:
-        raise BakeError(f"the Flame igniter {', '.join(repr(n) for n in flames)} burns as "
-                        "fire particles, which need Crumple on: tick Crumple, or set its Kind "
-                        "to Lights What It Touches")
-    if settings.heat_ignites and not shell:
-        raise BakeError("Heat Ignites needs Crumple on (the heat comes from the fire's "
-                        "particles): tick Crumple, or untick Heat Ignites")
-
-
-def _maps(obj, settings, frames: list) -> tuple:
+def _maps(obj, settings) -> tuple:
     """({map name: (n,) values}, ignite frame index or None) as the bake reads them."""
     maps = {}
     for key in ("speed_map", "fuel_map", "ignite_map"):
         values = inputs.vertex_map(obj, settings, key)
         if values is not None:
             maps[key] = values
-    if "ignite_map" not in maps:
-        return maps, None
-    if not frames[0] <= settings.ignite_frame <= frames[-1]:
-        raise BakeError(f"Ignite Frame {settings.ignite_frame} is outside the bake's frames "
-                        f"{frames[0]}–{frames[-1]}: set it in Physics > ThinBurn > Painted")
-    return maps, settings.ignite_frame - frames[0]
+    return maps, (job.ignite_frame_index(settings) if "ignite_map" in maps else None)
 
 
 def _base_spec(obj, context, frames: list, fps: float, shell: bool):
@@ -65,13 +47,13 @@ def _base_spec(obj, context, frames: list, fps: float, shell: bool):
     settings = obj.thinburn
     world, tris, matrix = inputs.sheet_geometry(obj)
     floor = inputs.floor_height(context.scene, settings)
-    _check_floor(obj, world, floor, settings)
+    job.check_floor(obj, world, floor, settings)
     pinned = (np.flatnonzero(inputs.pin_mask(obj, settings.pin_group)).tolist()
               if settings.pin_group else None)
     params = {key: float(getattr(settings, key)) for key in properties.MODEL_PARAMS}
     if shell:
         params.update(inputs.dynamics(context.scene, settings))
-    maps, ignite_frame = _maps(obj, settings, frames)
+    maps, ignite_frame = _maps(obj, settings)
     mat = properties.build_material(settings).as_dict()
     mat.pop("name", None)
     spec = SceneSpec(world, tris, material={"preset": settings.material, **mat}, name=obj.name,
@@ -144,41 +126,34 @@ class FrameRecorder:
             self.maps.append(F)
 
     def ignitions(self, dt: float) -> list:
-        """Every frame's Empty ignitions, as job.BakeJob._task makes them, in its order."""
-        out = []
-        for k, here in enumerate(self.samples):
-            last = k + 1 == len(self.samples)
-            for i, start in enumerate(here.igniters):
-                start = _in_bake_frame(start, self.maps[k])
-                end = None if last else _in_bake_frame(self.samples[k + 1].igniters[i], self.maps[k + 1])
-                for point, t, radius in path_ignitions(start, end, k * dt, dt, max(self.spacing, 0.5 * start[2])):
-                    out.append({"point": [float(x) for x in point], "time": float(t), "radius": float(radius)})
+        """Every frame's Empty ignitions, as the bake makes them (job.empty_ignitions), in its
+        order."""
+        out, n = [], len(self.samples)
+        for k, (here, F) in enumerate(zip(self.samples, self.maps)):
+            there, F_next = (self.samples[k + 1], self.maps[k + 1]) if k + 1 < n else (None, None)
+            out += [{"point": [float(x) for x in point], "time": float(t), "radius": float(radius)}
+                    for point, t, radius in job.empty_ignitions(here, there, F, F_next, k, dt, self.spacing)]
         return out
 
     def surfaces(self, dt: float) -> list:
-        return [{"points": moving.to_bake(F, pts), "radius": max(float(radius), self.spacing), "time": k * dt}
-                for k, (s, F) in enumerate(zip(self.samples, self.maps)) for pts, radius in (s.surfaces or [])]
+        return [{"points": pts, "radius": float(radius), "time": float(t)}
+                for k, (s, F) in enumerate(zip(self.samples, self.maps))
+                for pts, radius, t in job.surface_ignitions(s, F, k, dt, self.spacing)]
 
     def flame_rows(self):
+        """Per frame the lit Flames as rows [x, y, z, width], or None without Flames."""
         if not self.flames:
             return None
-        out = []
-        for s, F in zip(self.samples, self.maps):
-            lit = s.flames or []
-            pts = moving.to_bake(F, np.array([p for p, _ in lit], dtype=np.float64).reshape(-1, 3))
-            out.append(np.column_stack([pts, [w for _, w in lit]]).reshape(-1, 4))
-        return out
+        return [np.column_stack(job.flame_sources(s, F)).reshape(-1, 4)
+                for s, F in zip(self.samples, self.maps)]
 
     def dynamics(self, params: dict):
         """Per frame the motion parameters with gravity in the bake frame, or None when every
         frame has those the Simulation is built with (``params``)."""
-        rows = []
-        for s, F in zip(self.samples, self.maps):
-            now = dict(s.dynamics)
-            now["gravity"] = [float(g) for g in moving.direction_to_bake(F, now["gravity"])]
-            rows.append(now)
-        base = {k: (list(v) if k == "gravity" else v) for k, v in params.items() if k in rows[0]}
-        return rows if any(r != base for r in rows) else None
+        rows = [job.bake_frame_dynamics(s, F) for s, F in zip(self.samples, self.maps)]
+        base = {k: v for k, v in params.items() if k in rows[0]}
+        return [{k: (list(v) if k == "gravity" else v) for k, v in r.items()} for r in rows] \
+            if any(r != base for r in rows) else None
 
     def wind(self, centre: np.ndarray) -> list:
         """Per frame the wind at the sheet's centre at Start, turned into the bake frame."""
@@ -195,22 +170,12 @@ class FrameRecorder:
                 warnings.warn(f"Collision '{name}' changes shape during the bake: the scene file "
                               "holds its shape at Start (its pose and Friction per frame)",
                               ExportWarning, stacklevel=3)
-            poses = [_pose_in_bake_frame(c, F) for c, F in zip(track, self.maps)]
+            poses = [job.collider_in_bake_frame(c, F) for c, F in zip(track, self.maps)]
             out.append({"name": name, "vertices": first["vertices"], "faces": first["faces"],
                         "thickness": first["thickness"], "friction": [c["friction"] for c in track],
-                        "rotation": [r for r, _ in poses], "translation": [t for _, t in poses]})
+                        "rotation": [c["rotation"] for c in poses],
+                        "translation": [c["translation"] for c in poses]})
         return out
-
-
-def _in_bake_frame(igniter, F):
-    pos, strength, radius = igniter
-    return moving.to_bake(F, pos[None, :])[0], strength, radius
-
-
-def _pose_in_bake_frame(c: dict, F) -> tuple:
-    """A collider's pose taken from the world into the bake frame (job.BakeJob._collider_task)."""
-    inv = np.linalg.inv(F)
-    return inv[:3, :3] @ c["rotation"], inv[:3, :3] @ c["translation"] + inv[:3, 3]
 
 
 def _warn_wind(recorder: FrameRecorder, world: np.ndarray) -> None:
@@ -248,12 +213,12 @@ def scene_spec(obj, context=None):
     frames = list(range(settings.frame_start, settings.frame_end + 1))
     fps = scene.render.fps / scene.render.fps_base
     dt = 1.0 / fps
-    shell = bool(settings.crumple and core_supports("shell"))
+    shell = bool(settings.crumple and job.core_supports("shell"))
     restore = scene.frame_current
     try:
         scene.frame_set(frames[0])
         _warn_group(scene, obj)
-        _checked_kinds(obj, settings, shell, inputs.flame_igniters(inputs.igniter_objects(obj, settings)))
+        job.check_crumple_needs(settings, shell, inputs.flame_igniters(inputs.igniter_objects(obj, settings)))
         spec, m0 = _base_spec(obj, context, frames, fps, shell)
         spacing = _core_spacing(spec, 0.5 * inputs.cell_spacing(spec.vertices, spec.faces, settings.cells))
         recorder = FrameRecorder(context, obj, frames, spacing, _colliders(context, obj, shell), m0)
