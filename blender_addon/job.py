@@ -14,13 +14,15 @@ import bpy
 import numpy as np
 import thinburn
 
-from . import cache, fire, inputs, materials, moving, properties, stretch
+from thinburn import bake_frame as moving
+
+from . import cache, fire, inputs, materials, properties, stretch
 from .inputs import BakeError
 from .worker import CoreWorker, FrameTask, path_ignitions
 
 LOOKAHEAD = 4  # frames sampled ahead of the worker
 # A sheet whose transform tilts it further than this is told that buoyancy, climb and flames
-# keep its up at Start (moving.py): below it the error in "up" is under 1 - cos 10° = 1.5 %.
+# keep its up at Start (thinburn.bake_frame): below it the error in "up" is under 1 - cos 10° = 1.5 %.
 TILT_WARNING_DEG = 10.0
 
 
@@ -290,8 +292,8 @@ class BakeJob:
                 f"{settings.cells} fire cells, so the burn shows only at those points: subdivide "
                 f"the mesh (Edit Mode > Subdivide; about {settings.cells // 2} cuts) for a "
                 "visible fire front")
-        # The sheet's animated transform is followed: the core runs in the bake frame (moving.py),
-        # F_k maps it to the world at frame index k.
+        # The sheet's animated transform is followed: the core runs in the bake frame
+        # (thinburn.bake_frame), F_k maps it to the world at frame index k.
         self.frame_maps = {}
         self.tilt = 0.0  # degrees, the most the bake frame's up turned from the world's
         self.worker = CoreWorker(lambda: thinburn.Simulation(world, tris, **kwargs), self.dt,
@@ -301,7 +303,7 @@ class BakeJob:
     # --- setup -------------------------------------------------------------------------------
     def _check_group(self, objs) -> None:
         """A group bakes in the world, so its sheets must keep still (a lone sheet's animated
-        transform is followed: moving.py)."""
+        transform is followed: thinburn.bake_frame)."""
         for member in objs:
             what = inputs.transform_animation(member)
             if what:

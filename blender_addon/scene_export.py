@@ -6,22 +6,25 @@ and writes what the core is given: the world-space mesh at the first frame (lift
 Floor object as the bake lifts it), the material, the settings (Heat Ignites, Burn Duration),
 the painted maps, and per frame each lit igniter's ignitions (an Empty's position and its path
 to the next frame, a mesh igniter's surface points, the Flames), the collision objects' poses
-and friction, the wind, the keyframed motion parameters and gravity. A sheet whose transform
-is animated is written in the bake frame (moving.py), with each frame's map to the world.
-What a scene file cannot hold is said, one ``ExportWarning`` per setting (the operator
-reports them): the other sheets of a Heat Ignites group, wind that varies across the sheet, a
-collision object that changes shape. ``python -m thinburn wedge --scene FILE --param ...``
-then bakes it outside Blender.
+and friction, the force fields (blown as the bake blows them), the keyframed motion parameters
+and gravity. A sheet whose transform is animated is written in the bake frame
+(thinburn.bake_frame), with each frame's map to the world. What a scene file cannot hold is
+said, one ``ExportWarning`` per setting (the operator reports them): the other sheets of a Heat
+Ignites group, a collision object that changes shape. ``python -m thinburn wedge --scene FILE
+--param ...`` then bakes it outside Blender.
 """
 from __future__ import annotations
 
+import dataclasses
 import warnings
 
 import bpy
 import numpy as np
 from bpy.props import StringProperty
 
-from . import fields, inputs, job, moving, properties
+from thinburn import bake_frame as moving
+
+from . import inputs, job, properties
 from .file_export import ExportOperator, registrar
 from .inputs import BakeError
 
@@ -156,9 +159,18 @@ class FrameRecorder:
             if any(r != base for r in rows) else None
 
     def wind(self, centre: np.ndarray) -> list:
-        """Per frame the wind at the sheet's centre at Start, turned into the bake frame."""
+        """Per frame the wind at the sheet's centre at Start, turned into the bake frame (what
+        the fields blow there; a reader of the file blows the fields themselves)."""
         return [moving.direction_to_bake(F, s.wind_at(moving.to_world(F, centre[None]))[0]).tolist()
                 for s, F in zip(self.samples, self.maps)]
+
+    def field_specs(self):
+        """Per frame the force fields (world), the scene frame and Wind Scale, or None when the
+        view layer has none (the bake then blows no wind)."""
+        if not self.winds:
+            return None
+        return [{"frame": int(s.frame), "wind_scale": float(s.wind_scale),
+                 "fields": [dataclasses.asdict(f) for f in s.fields]} for s in self.samples]
 
     def collider_specs(self) -> list:
         out = []
@@ -176,19 +188,6 @@ class FrameRecorder:
                         "rotation": [c["rotation"] for c in poses],
                         "translation": [c["translation"] for c in poses]})
         return out
-
-
-def _warn_wind(recorder: FrameRecorder, world: np.ndarray) -> None:
-    """The scene file has one wind per frame: say so for each field whose wind varies across
-    the sheet (its falloff, noise or shape), which the bake blows per lattice vertex."""
-    for i, name in enumerate(recorder.winds):
-        for s, F in zip(recorder.samples, recorder.maps):
-            w = fields.wind_at([s.fields[i]], moving.to_world(F, world), s.frame)
-            if np.ptp(w, axis=0).max() > 1e-9:
-                warnings.warn(f"Wind '{name}' varies across the sheet (its falloff, noise or "
-                              "shape): the scene file holds one wind per frame, at the sheet's "
-                              "centre", ExportWarning, stacklevel=3)
-                break
 
 
 def _warn_group(scene, obj) -> None:
@@ -225,13 +224,12 @@ def scene_spec(obj, context=None):
         recorder.sample(spec.floor)
     finally:
         scene.frame_set(restore)
-    _warn_wind(recorder, spec.vertices)
     spec.igniters = recorder.ignitions(dt)
     spec.surfaces = recorder.surfaces(dt)
     spec.flames = recorder.flame_rows()
     spec.dynamics = recorder.dynamics(spec.params) if shell else None
     spec.wind = recorder.wind(spec.vertices.mean(axis=0))
-    spec.wind_field = bool(shell and recorder.winds)
+    spec.fields = recorder.field_specs()
     spec.colliders = recorder.collider_specs()
     moves = any(not np.array_equal(F, np.eye(4)) for F in recorder.maps)
     spec.to_world = [F.tolist() for F in recorder.maps] if moves else None

@@ -96,7 +96,7 @@ def export_object(obj, path, scene=None) -> str:
 def world_matrices(obj, scene, frames):
     """The sheet's world matrix (4, 4), or one per cached frame (F, 4, 4) when its transform
     is animated: the cache is in object space, and Blender places it with the matrix of each
-    frame (the bake follows a moving sheet, moving.py)."""
+    frame (the bake follows a moving sheet, thinburn.bake_frame)."""
     if not transform_animation(obj):
         return np.array(obj.matrix_world, dtype=np.float64)
     restore = scene.frame_current

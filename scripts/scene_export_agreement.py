@@ -6,11 +6,12 @@
 Needs bpy (pip install bpy, CPython 3.11) and thinburn installed in the same environment.
 Builds the two scenes of tests/blender/test_scene_export.py (tests/blender/export_scenes.py:
 igniters of every kind with Heat Ignites, Burn Duration, keyframed motion and painted maps;
-a moving cloth sheet on a sliding Collision box in a uniform Wind), bakes each with the
+a moving cloth sheet on a sliding Collision box in a gusty Wind and a Turbulence), bakes each
+with the
 add-on, exports it, bakes the file with thinburn.wedge, and prints per scene the largest
 position difference (m), the first frame index at which positions differ, and how many
 vertices' ignition and burnout frames differ, and where the sheet's middle vertex ends (object
-space, m); then the same second scene without its Wind.
+space, m); then the same second scene without its force fields (to show they move it).
 """
 from __future__ import annotations
 
@@ -40,11 +41,11 @@ def enable_addon(user_dir: Path):
     return sys.modules[ADDON_NAME]
 
 
-def without_wind(scene):
+def without_fields(scene):
     def build(cache_dir):
         import bpy
         sheet = scene(cache_dir)
-        for ob in [o for o in bpy.data.objects if o.field is not None and o.field.type == "WIND"]:
+        for ob in [o for o in bpy.data.objects if o.field is not None and o.field.type != "NONE"]:
             bpy.data.objects.remove(ob)
         return sheet
     return build
@@ -59,7 +60,7 @@ def main() -> int:
 
     rows = {}
     for name, build in (("igniters", scenes.igniters_scene), ("collider", scenes.collider_scene),
-                        ("collider without wind", without_wind(scenes.collider_scene))):
+                        ("collider without fields", without_fields(scenes.collider_scene))):
         bpy.ops.wm.read_homefile(use_empty=True)
         folder = work / name.replace(" ", "_")
         sheet = build(folder)

@@ -9,12 +9,16 @@ import json
 import numpy as np
 import pytest
 
-from thinburn import scenefile, wedge
+from thinburn import force_fields, scenefile, wedge
 from thinburn.colliders import Colliders
 from thinburn.scenes import rect_sheet
 from thinburn.simulation import Simulation
 
 FRAMES, FPS = 6, 24.0
+# A noisy Wind with a sphere falloff along +y (a FieldSpec, as the add-on reads Blender's).
+GUST = dict(kind="WIND", origin=(0.0, 0.0, 0.2), axis=(0.0, 1.0, 0.0), shape="POINT", strength=2.0,
+            noise=1.0, seed=3, z_direction="BOTH", falloff="SPHERE", power=1.0, use_min=False,
+            min_distance=0.0, use_max=False, max_distance=0.0)
 
 
 def _box(half=0.05, centre=(0.1, 0.1, -0.06)):
@@ -39,7 +43,9 @@ def _v2_spec() -> scenefile.SceneSpec:
         verts, faces, material="paper", cells=16, fps=FPS, frames=FRAMES, floor=None,
         igniters=[{"point": [0.0, 0.0, 0.0], "time": 0.0, "radius": 0.02}],
         params={"buoyancy": 1.0, "gravity": g}, heat_ignites=True, finish_within=20.0,
-        ignite_frame=2, wind_field=True, wind=[[0.0, 0.1 * k, 0.0] for k in range(FRAMES)],
+        ignite_frame=2, wind=[[0.0, 0.1 * k, 0.0] for k in range(FRAMES)],
+        fields=[{"frame": k + 1, "wind_scale": 0.5, "fields": [dict(GUST, origin=(0.1 * k, 0.0, 0.2))]}
+                for k in range(FRAMES)],
         maps={"speed_map": speed.tolist(), "fuel_map": np.ones(n).tolist(), "ignite_map": ignite.tolist()},
         surfaces=[{"points": [[0.2, 0.0, 0.0], [0.2, 0.01, 0.0]], "time": 1 / FPS, "radius": 0.01}],
         flames=[[] if k < 3 else [[0.1, 0.1, -0.02, 0.01]] for k in range(FRAMES)],
@@ -64,7 +70,7 @@ def test_version_2_fields_round_trip(tmp_path, ext):
 def test_a_scene_without_version_2_fields_is_written_as_version_1(tmp_path):
     """So an older thinburn on a farm still reads the scenes it could read before."""
     d = scenefile.demo_scene("paper", vertices=30).to_dict()
-    assert d["version"] == 1 and "wind_field" not in d["settings"] and "maps" not in d
+    assert d["version"] == 1 and "heat_ignites" not in d["settings"] and "maps" not in d
 
 
 def test_an_older_reader_is_told_to_upgrade():
@@ -86,6 +92,12 @@ def test_an_older_reader_is_told_to_upgrade():
     ({"dynamics": [{"bouyancy": 1.0}] * FRAMES}, ValueError, r"dynamics\[0\]: unknown motion parameters"),
     ({"surfaces": [{"points": [[0, 0]]}]}, ValueError, r"surfaces\[0\].points has invalid shape"),
     ({"to_world": [np.eye(3).tolist()] * FRAMES}, ValueError, r"to_world\[0\] has invalid shape"),
+    ({"fields": [{"frame": 1, "fields": [dict(GUST, kind="VORTEX")]}] * FRAMES}, ValueError,
+     r"fields\[0\].fields\[0\].kind: unknown value 'VORTEX'"),
+    ({"fields": [{"frame": 1, "fields": [dict(GUST, gusty=True)]}] * FRAMES}, ValueError,
+     r"fields\[0\].fields\[0\]: unknown field settings \['gusty'\]"),
+    ({"fields": [{"frame": 1, "fields": [{k: v for k, v in GUST.items() if k != "power"}]}] * FRAMES},
+     ValueError, r"fields\[0\].fields\[0\]: .*power"),
 ])
 def test_bad_version_2_fields_are_named(change, error, match):
     d = _v2_spec().to_dict()
@@ -137,8 +149,12 @@ def _by_hand(spec):
             colliders.set_transform(0, c["translation"][k], np.eye(3))
         if k == 3:
             colliders.set_friction(0, 0.2)
-        sim.set_wind_field(np.broadcast_to(np.asarray(spec.wind[k]), np.asarray(sim.lattice_positions()).shape))
-        sim.wind = spec.wind[k]
+        # The add-on worker's wind: the fields at the lattice's control vertices (no move here).
+        points = np.asarray(sim.lattice_positions()).reshape(-1, 3)
+        gust = force_fields.FieldSpec(**dict(GUST, origin=(0.1 * k, 0.0, 0.2)))
+        wind = force_fields.wind_at([gust], points, k + 1) * 0.5
+        sim.set_wind_field(wind)
+        sim.wind = tuple(wind.mean(axis=0))
         if k == 4:
             sim.set_dynamics(buoyancy=1.5)
         sim.step(dt)
@@ -174,5 +190,6 @@ def test_a_wedge_of_a_moving_sheet_writes_world_positions(tmp_path, capsys):
     spec = scenefile.load_scene(path)
     sim, _, fps, frames = wedge.simulation_for(spec, {})
     want = []
-    wedge.run_frames(sim, spec, fps, frames, lambda k, s: want.append(s.vertex_positions() + [0.01 * k, 0, 0]))
+    wedge.run_frames(sim, spec, fps, frames,
+                     lambda k, s: want.append(s.vertex_positions() + [0.01 * k, 0, 0]))
     np.testing.assert_array_equal(got, np.asarray(want, dtype=np.float32))

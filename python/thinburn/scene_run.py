@@ -2,7 +2,8 @@
 
 ``SceneRun(spec, fps)`` holds what a scene lights, blows and moves frame by frame;
 ``before_record(sim, k)`` lights frame k's igniters, surfaces and painted map, and
-``before_step(sim, k)`` sets its flames, colliders, wind and motion parameters. The order and
+``before_step(sim, k)`` sets its flames, colliders, wind (its force fields') and motion
+parameters. The order and
 the calls are those of the add-on's worker (blender_addon/worker.py), so a scene exported from
 Blender bakes here as it does there.
 """
@@ -11,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from .colliders import Colliders
+from .force_fields import FieldSpec, blow
 from .scenefile import DYNAMICS
 
 
@@ -112,13 +114,24 @@ class SceneRun:
             rows = np.asarray(_at(spec.flames, k), dtype=np.float64).reshape(-1, 4)
             sim.set_fire_sources(rows[:, :3], rows[:, 3])
         self.colliders.apply(sim, k)
-        wind = spec.wind_at(k)
-        if spec.wind_field:
-            shape = np.asarray(sim.lattice_positions()).shape
-            sim.set_wind_field(np.broadcast_to(np.asarray(wind, dtype=np.float64), shape))
-        sim.wind = wind
+        if spec.fields:
+            self._blow(sim, k)
+        else:
+            sim.wind = spec.wind_at(k)
         if spec.dynamics:
             self._set_dynamics(sim, _at(spec.dynamics, k))
+
+    def _blow(self, sim, k: int) -> None:
+        """The frame's force fields, as the add-on blows them (force_fields.blow)."""
+        entry = _at(self.spec.fields, k)
+        F = np.eye(4) if not self.spec.to_world else np.asarray(_at(self.spec.to_world, k), dtype=np.float64)
+        blow(sim, self._specs(entry), entry["wind_scale"], entry["frame"], F,
+             sim.vertex_positions(), bool(self.spec.shell))
+
+    @staticmethod
+    def _specs(entry: dict) -> list:
+        return [FieldSpec(**{key: (tuple(v) if isinstance(v, list) else v) for key, v in f.items()})
+                for f in entry["fields"]]
 
     @staticmethod
     def _plain(values: dict) -> dict:

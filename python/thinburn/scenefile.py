@@ -14,8 +14,8 @@ are built by ``demo_scene``. ``load_scene`` / ``save_scene`` pick the format by 
      "settings": {"cells": 64, "fps": 24, "frames": 240, "seed": 0, "front": "fmm",
                   "lattice": null, "floor": 0.0, "pinned": [0, 42], "integrator": "implicit",
                   "shell": true, "wind": [0, 0, 0],      # or one [x, y, z] per frame
-                  "wind_field": false,                   # version 2 from here on
-                  "heat_ignites": false, "finish_within": null, "ignite_frame": null},
+                  "heat_ignites": false, "finish_within": null,   # version 2 from here on
+                  "ignite_frame": null},
      "params": {"crumple_gain": 1.0, "gravity": [0, 0, -9.81]},  # Simulation(**params)
      "maps": {"speed_map": [...], "fuel_map": [...], "ignite_map": [...]},  # one per vertex
      "surfaces": [{"points": [[x, y, z], ...], "time": 0.0, "radius": 0.01}],
@@ -24,6 +24,7 @@ are built by ``demo_scene``. ``load_scene`` / ``save_scene`` pick the format by 
      "colliders": [{"name": "Ball", "vertices": [...], "faces": [...], "thickness": 0.001,
                     "friction": 0.5 or [per frame], "rotation": [[3 x 3] per frame],
                     "translation": [[x, y, z] per frame]}],
+     "fields": [{"frame": 1, "wind_scale": 1.0, "fields": [{"kind": "WIND", ...}]}, ...],
      "to_world": [[4 x 4] per frame] or null}
 
 ``.npz``: the arrays ``vertices`` and ``faces``, and ``scene``, the rest as a JSON string.
@@ -31,9 +32,12 @@ are built by ``demo_scene``. ``load_scene`` / ``save_scene`` pick the format by 
 Frame k of a bake is simulated time k / fps: its igniters with time in [k/fps, (k+1)/fps) are
 lit (in the file's order), then its ``surfaces`` (``Simulation.ignite_near``), then the
 ``ignite_map`` at frame ``ignite_frame``; the state is recorded; then the frame's flames
-(``set_fire_sources``), colliders' poses, wind (with ``wind_field`` also per lattice vertex)
-and changed ``dynamics`` are set and one step of 1/fps is taken (the last frame takes none), as
-the add-on's bake does. A file with none of the version-2 fields is written as version 1.
+(``set_fire_sources``), colliders' poses, wind and changed ``dynamics`` are set and one step of
+1/fps is taken (the last frame takes none), as the add-on's bake does. The wind is ``wind``,
+or with ``fields`` (per frame: Blender's Wind and Turbulence fields, thinburn.force_fields.
+FieldSpec, at that scene frame, times the sheet's Wind Scale) the fields' wind at the
+lattice's control vertices (``force_fields.blow``), and ``wind`` only says what it was at the
+sheet's centre. A file with none of the version-2 fields is written as version 1.
 """
 from __future__ import annotations
 
@@ -50,13 +54,13 @@ FORMAT = "thinburn-scene"
 VERSION = 2
 SETTINGS_V1 = ("cells", "fps", "frames", "seed", "front", "lattice", "floor", "pinned",
                "integrator", "shell", "wind")
-SETTINGS_V2 = ("wind_field", "heat_ignites", "finish_within", "ignite_frame")
+SETTINGS_V2 = ("heat_ignites", "finish_within", "ignite_frame")
 SETTINGS = SETTINGS_V1 + SETTINGS_V2
 MAPS = ("speed_map", "fuel_map", "ignite_map")
 # Per-frame motion parameters (Simulation.set_dynamics): the add-on's keyframeable ones.
 DYNAMICS = ("buoyancy", "wind_drag", "friction", "crumple_gain", "gravity")
 # What a version-1 file cannot hold: written only when set, and then as version 2.
-V2_FIELDS = ("maps", "surfaces", "flames", "dynamics", "colliders", "to_world")
+V2_FIELDS = ("maps", "surfaces", "flames", "dynamics", "colliders", "fields", "to_world")
 
 
 @dataclass
@@ -80,7 +84,6 @@ class SceneSpec:
     shell: bool = True
     wind: object = (0.0, 0.0, 0.0)       # (3,) or one (3,) per frame
     params: dict = field(default_factory=dict)
-    wind_field: bool = False             # the wind also as the lattice's wind field (uniform)
     heat_ignites: bool = False           # Simulation(heat_ignites=)
     finish_within: float | None = None   # Simulation(finish_within=), seconds
     ignite_frame: int | None = None      # the frame index at which maps["ignite_map"] lights
@@ -89,6 +92,7 @@ class SceneSpec:
     flames: list | None = None           # per frame: (k, 4) rows [x, y, z, width]
     dynamics: list | None = None         # per frame: {DYNAMICS key: value}
     colliders: list = field(default_factory=list)  # dicts, see the module docstring
+    fields: list | None = None           # per frame: {"frame", "wind_scale", "fields": [FieldSpec dicts]}
     to_world: list | None = None         # per frame (4, 4): the bake frame to the world
     view_pad: float = 0.35               # the pictures' room around the sheet (not saved)
 
@@ -130,7 +134,7 @@ class SceneSpec:
     def version(self) -> int:
         """1 when the scene uses nothing a version-1 reader lacks, else 2."""
         new = any(getattr(self, k) for k in V2_FIELDS)
-        new = new or self.wind_field or self.heat_ignites or self.finish_within is not None
+        new = new or self.heat_ignites or self.finish_within is not None
         return 2 if new or self.ignite_frame is not None else 1
 
     def to_dict(self) -> dict:
@@ -210,7 +214,6 @@ def _flag(value, name: str) -> bool:
 
 def _read_v2(spec: SceneSpec, d: dict) -> None:
     """The version-2 fields, each checked; a message names the field."""
-    spec.wind_field = _flag(spec.wind_field, "wind_field")
     spec.heat_ignites = _flag(spec.heat_ignites, "heat_ignites")
     if spec.heat_ignites and not spec.shell:
         raise ValueError("heat_ignites: the heat comes from the fire particles, which need shell true")
@@ -228,10 +231,48 @@ def _read_v2(spec: SceneSpec, d: dict) -> None:
     spec.dynamics = _per_frame(d.get("dynamics"), "dynamics", spec.frames, _dynamics)
     spec.colliders = [_collider(c, f"colliders[{i}]", spec.frames)
                       for i, c in enumerate(d.get("colliders") or [])]
+    spec.fields = _per_frame(d.get("fields"), "fields", spec.frames, _frame_fields)
     spec.to_world = _per_frame(d.get("to_world"), "to_world", spec.frames,
                                lambda m, name: V.real_array(m, name, (4, 4)).tolist())
-    if (spec.flames or spec.colliders or spec.wind_field) and not spec.shell:
-        raise ValueError("flames, colliders and wind_field act on the sheet's motion: they need shell true")
+    if (spec.flames or spec.colliders) and not spec.shell:
+        raise ValueError("flames and colliders act on the sheet's motion: they need shell true")
+
+
+def _frame_fields(entry, name: str) -> dict:
+    """One frame's force fields: the scene frame (their noise is drawn per frame), the Wind
+    Scale, and each field's FieldSpec values."""
+    if not isinstance(entry, dict) or "fields" not in entry:
+        raise ValueError(f"{name}: need an object with 'frame', 'wind_scale' and 'fields'")
+    out = {"frame": V.integer(entry.get("frame", 0), f"{name}.frame"),
+           "wind_scale": V.real(entry.get("wind_scale", 1.0), f"{name}.wind_scale"), "fields": []}
+    for i, f in enumerate(entry["fields"]):
+        out["fields"].append(_field_spec(f, f"{name}.fields[{i}]"))
+    return out
+
+
+def _field_spec(f, name: str) -> dict:
+    """A FieldSpec's values, checked: the names it has, the kinds and shapes it knows."""
+    from dataclasses import fields as dataclass_fields
+
+    from .force_fields import FieldSpec
+
+    if not isinstance(f, dict):
+        raise TypeError(f"{name} must be an object of FieldSpec values, got {type(f).__name__}")
+    known = [x.name for x in dataclass_fields(FieldSpec)]
+    unknown = sorted(set(f) - set(known))
+    if unknown:
+        raise ValueError(f"{name}: unknown field settings {unknown}; they are {known}")
+    V.choice(f.get("kind"), f"{name}.kind", ("WIND", "TURBULENCE"))
+    V.choice(f.get("shape"), f"{name}.shape", ("POINT", "LINE", "PLANE"))
+    V.choice(f.get("z_direction"), f"{name}.z_direction", ("BOTH", "POSITIVE", "NEGATIVE"))
+    V.choice(f.get("falloff"), f"{name}.falloff", ("SPHERE", "TUBE", "CONE"))
+    for key in ("origin", "axis"):
+        V.vector3(f.get(key), f"{name}.{key}")
+    try:
+        FieldSpec(**f)
+    except TypeError as exc:  # a missing value
+        raise ValueError(f"{name}: {exc}") from None
+    return dict(f)
 
 
 def _maps(maps, n: int) -> dict:

@@ -72,7 +72,7 @@ def igniters_scene(cache_dir):
 
 def collider_scene(cache_dir):
     """A cloth sheet carried along x by its keyframed location, falling onto a Collision box
-    that slides along y with keyframed Friction, in a uniform Wind along +x."""
+    that slides along y with keyframed Friction, in a gusty Wind along +x and a Turbulence."""
     import bpy
     sheet = make_sheet(n=17, size=0.2, z=0.06)
     s = setup_bake(sheet, frames=FRAMES, cells=16, cache_dir=cache_dir, floor=False)
@@ -84,8 +84,13 @@ def collider_scene(cache_dir):
     box.collision.thickness_outer = 0.002
     keyframe(box, "location", {1: (0.0, 0.0, 0.0), FRAMES: (0.0, 0.02, 0.0)})
     keyframe(box, "collision.cloth_friction", {1: 50.0, 8: 10.0})
-    bpy.ops.object.effector_add(type="WIND", rotation=(0.0, np.pi / 2, 0.0))  # no falloff, no noise
-    bpy.context.active_object.field.strength = 0.5
+    bpy.ops.object.effector_add(type="WIND", rotation=(0.0, np.pi / 2, 0.0))  # along +x
+    wind = bpy.context.active_object
+    wind.field.strength, wind.field.noise = 0.5, 1.0  # a gusty wind: random per point and frame
+    wind.field.seed = 1  # a new field draws its own seed: set, so every run bakes alike
+    bpy.ops.object.effector_add(type="TURBULENCE", location=(0.0, 0.1, 0.1))
+    turbulence = bpy.context.active_object
+    turbulence.field.strength, turbulence.field.seed = 0.3, 2
     return sheet
 
 
@@ -126,7 +131,8 @@ def bake_both(addon, sheet, folder):
 def differences(inside, outside) -> dict:
     """The largest position difference (m) and how many vertices' ignition and burnout frames
     differ, with the frame the positions first differ at (None: never)."""
-    d = np.abs(inside[0].astype(np.float64) - outside[0].astype(np.float64)).reshape(len(inside[0]), -1).max(axis=1)
+    d = np.abs(inside[0].astype(np.float64) - outside[0].astype(np.float64))
+    d = d.reshape(len(d), -1).max(axis=1)
     first = np.flatnonzero(d > 0)
     return {"positions_m": float(d.max()), "first_frame_index": int(first[0]) if len(first) else None,
             "ignition_differ": int(np.count_nonzero(inside[1] != outside[1])),
