@@ -9,8 +9,8 @@ import bpy
 import mathutils
 import numpy as np
 
-from . import fields
-from .fields import FieldSpec
+from thinburn import force_fields as fields
+from thinburn.force_fields import FieldSpec
 from .properties import DYNAMIC_PARAMS, MODEL_PARAMS
 
 
@@ -226,7 +226,7 @@ def wind_objects(view_layer) -> list:
 
 
 def field_spec(ob) -> FieldSpec:
-    """A force field's settings now, in world space (fields.py evaluates them)."""
+    """A force field's settings now, in world space (thinburn.force_fields evaluates them)."""
     f = ob.field
     m = ob.matrix_world
     axis = np.array(m.to_3x3().col[2], dtype=np.float64)

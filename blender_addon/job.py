@@ -14,13 +14,15 @@ import bpy
 import numpy as np
 import thinburn
 
-from . import cache, fire, inputs, materials, moving, properties, stretch
+from thinburn import bake_frame as moving
+
+from . import cache, fire, inputs, materials, properties, stretch
 from .inputs import BakeError
 from .worker import CoreWorker, FrameTask, path_ignitions
 
 LOOKAHEAD = 4  # frames sampled ahead of the worker
 # A sheet whose transform tilts it further than this is told that buoyancy, climb and flames
-# keep its up at Start (moving.py): below it the error in "up" is under 1 - cos 10° = 1.5 %.
+# keep its up at Start (thinburn.bake_frame): below it the error in "up" is under 1 - cos 10° = 1.5 %.
 TILT_WARNING_DEG = 10.0
 
 
@@ -56,7 +58,7 @@ class ProgressLines:
         self.stream.flush()
 
 
-def _check_floor(obj, world, floor, settings):
+def check_floor(obj, world, floor, settings):
     """The sheet must start on or above the floor: said in the panel's words, not the core's.
     A sheet lying on a Floor object's top face is lifted clear of it (inputs.FLOOR_CLEARANCE)."""
     if floor is None or len(world) == 0:
@@ -100,6 +102,74 @@ def explain_core_error(text: str, lattice: int) -> str:
     elif "cells" in text:
         out += ". The cells are Fire Detail (Physics > ThinBurn)"
     return out
+
+
+def check_crumple_needs(settings, shell: bool, flames: list) -> None:
+    """Flames and Heat Ignites work through the fire particles, which need Crumple on."""
+    if flames and not shell:
+        raise BakeError(f"the Flame igniter {', '.join(repr(n) for n in flames)} burns as "
+                        "fire particles, which need Crumple on: tick Crumple, or set its Kind "
+                        "to Lights What It Touches")
+    if settings.heat_ignites and not shell:
+        raise BakeError("Heat Ignites needs Crumple on (the heat comes from the fire's "
+                        "particles): tick Crumple, or untick Heat Ignites")
+
+
+def ignite_frame_index(settings) -> int:
+    """The index in the bake's frames at which the Ignite map lights."""
+    if not settings.frame_start <= settings.ignite_frame <= settings.frame_end:
+        raise BakeError(f"Ignite Frame {settings.ignite_frame} is outside the bake's frames "
+                        f"{settings.frame_start}–{settings.frame_end}: set it in Physics > "
+                        "ThinBurn > Painted")
+    return settings.ignite_frame - settings.frame_start
+
+
+# --- one frame's inputs in the bake frame (the core's), from the scene's samples --------------
+def in_bake_frame(igniter, F):
+    """An igniter's (world position, strength, radius) with its position in the bake frame."""
+    pos, strength, radius = igniter
+    return moving.to_bake(F, pos[None, :])[0], strength, radius
+
+
+def empty_ignitions(here, there, F, F_next, k: int, dt: float, spacing: float) -> list:
+    """Frame k's ignitions of the Empties: each lit one's position and its path to the next
+    frame (``there`` None on the last frame)."""
+    out = []
+    for i, start in enumerate(here.igniters):
+        start = in_bake_frame(start, F)
+        end = None if there is None else in_bake_frame(there.igniters[i], F_next)
+        out += path_ignitions(start, end, k * dt, dt, max(spacing, 0.5 * start[2]))
+    return out
+
+
+def surface_ignitions(here, F, k: int, dt: float, spacing: float) -> list:
+    """Frame k's mesh igniters: (points, radius, time). A mesh igniter lights the cells within
+    its radius of its surface (at least the surface's sampling, half a cell, so that radius 0
+    still touches the sheet)."""
+    return [(moving.to_bake(F, pts), max(radius, spacing), k * dt) for pts, radius in (here.surfaces or [])]
+
+
+def flame_sources(here, F) -> tuple:
+    """(points (k, 3), widths (k,)) of frame k's lit Flames."""
+    lit = here.flames or []
+    return (moving.to_bake(F, np.array([p for p, _ in lit], dtype=np.float64).reshape(-1, 3)),
+            np.array([w for _, w in lit], dtype=np.float64))
+
+
+def bake_frame_dynamics(here, F) -> dict:
+    """The frame's motion parameters, its gravity turned into the bake frame."""
+    now = dict(here.dynamics)
+    now["gravity"] = tuple(float(g) for g in moving.direction_to_bake(F, now["gravity"]))
+    return now
+
+
+def collider_in_bake_frame(c: dict, F) -> dict:
+    """A collider sample with its pose taken from the world into the bake frame."""
+    inv = np.linalg.inv(F)
+    c = dict(c)
+    c["rotation"] = inv[:3, :3] @ c["rotation"]
+    c["translation"] = inv[:3, :3] @ c["translation"] + inv[:3, 3]
+    return c
 
 
 class SheetCache:
@@ -163,7 +233,7 @@ class BakeJob:
             self.flames = inputs.flame_igniters(self.igniters)
             kwargs = self._simulation_kwargs(obj, settings, objs)
             self.floor = kwargs.get("floor")  # where the ash flakes land, too
-            _check_floor(obj, world, self.floor, settings)
+            check_floor(obj, world, self.floor, settings)
             for (name, first, count, mw), member in zip(parts, objs):
                 paths = inputs.cache_path(member, member.thinburn)
                 self.sheets.append(SheetCache(name, *paths, first, first + count, mw,
@@ -182,7 +252,8 @@ class BakeJob:
         self.cache_step = self.sheets[0].cache_step
         self.n_vertices = len(world)
         self.inverse = np.linalg.inv(self.matrix)
-        # Igniter paths are sampled half a cell apart: an estimate until the core says.
+        # Igniter paths are sampled half a cell apart: an estimate until the core says (the
+        # frames are sampled once it has: _await_shape).
         self.spacing = 0.5 * inputs.cell_spacing(world, tris, settings.cells)
         self.lattice = int(settings.lattice)
         self.max_strain = self.max_strain_frame = None  # set when a moving bake finishes
@@ -221,8 +292,8 @@ class BakeJob:
                 f"{settings.cells} fire cells, so the burn shows only at those points: subdivide "
                 f"the mesh (Edit Mode > Subdivide; about {settings.cells // 2} cuts) for a "
                 "visible fire front")
-        # The sheet's animated transform is followed: the core runs in the bake frame (moving.py),
-        # F_k maps it to the world at frame index k.
+        # The sheet's animated transform is followed: the core runs in the bake frame
+        # (thinburn.bake_frame), F_k maps it to the world at frame index k.
         self.frame_maps = {}
         self.tilt = 0.0  # degrees, the most the bake frame's up turned from the world's
         self.worker = CoreWorker(lambda: thinburn.Simulation(world, tris, **kwargs), self.dt,
@@ -232,7 +303,7 @@ class BakeJob:
     # --- setup -------------------------------------------------------------------------------
     def _check_group(self, objs) -> None:
         """A group bakes in the world, so its sheets must keep still (a lone sheet's animated
-        transform is followed: moving.py)."""
+        transform is followed: thinburn.bake_frame)."""
         for member in objs:
             what = inputs.transform_animation(member)
             if what:
@@ -267,14 +338,8 @@ class BakeJob:
                 raise BakeError("this thinburn core cannot pin vertices yet: clear the Pin Group")
             kwargs["pinned"] = (inputs.group_pin_mask(objs) if self.grouped
                                 else inputs.pin_mask(obj, settings.pin_group))
-        if self.flames and not self.shell:
-            raise BakeError(f"the Flame igniter {', '.join(repr(n) for n in self.flames)} burns as "
-                            "fire particles, which need Crumple on: tick Crumple, or set its Kind "
-                            "to Lights What It Touches")
+        check_crumple_needs(settings, self.shell, self.flames)
         if settings.heat_ignites:
-            if not self.shell:
-                raise BakeError("Heat Ignites needs Crumple on (the heat comes from the fire's "
-                                "particles): tick Crumple, or untick Heat Ignites")
             kwargs["heat_ignites"] = True
         if settings.burn_duration > 0:
             kwargs["finish_within"] = float(settings.burn_duration)
@@ -285,11 +350,7 @@ class BakeJob:
         self.ignite_values = self._vertex_map(obj, objs, "ignite_map")
         self.ignite_index = None
         if self.ignite_values is not None:
-            if not settings.frame_start <= settings.ignite_frame <= settings.frame_end:
-                raise BakeError(f"Ignite Frame {settings.ignite_frame} is outside the bake's frames "
-                                f"{settings.frame_start}–{settings.frame_end}: set it in Physics > "
-                                "ThinBurn > Painted")
-            self.ignite_index = settings.ignite_frame - settings.frame_start
+            self.ignite_index = ignite_frame_index(settings)
         floor = inputs.floor_height(self.scene, settings)
         if floor is not None:
             if not core_supports("floor"):
@@ -324,12 +385,14 @@ class BakeJob:
     # --- driving -----------------------------------------------------------------------------
     def tick(self, budget_s: float = 0.05) -> bool:
         """Sample ahead, hand frames to the worker, store what came back. True when finished."""
-        self._sample_ahead(_time.perf_counter() + budget_s)
+        if self._await_shape(block=False):
+            self._sample_ahead(_time.perf_counter() + budget_s)
         self._drain(block=False)
         return self.finished
 
     def run(self, progress=None) -> None:
         """Bake to the end (background mode); ``progress(self)`` after each frame, if given."""
+        self._await_shape(block=True)
         while not self.finished:
             self._sample_ahead(_time.perf_counter() + 1.0)
             self._drain(block=True)
@@ -386,28 +449,16 @@ class BakeJob:
         here = self.samples[k]
         there = None if last else self.samples[k + 1]
         F = self.frame_maps[k]
-        ignitions = []
-        for i, start in enumerate(here.igniters):
-            start = self._in_bake_frame(start, F)
-            end = None if there is None else self._in_bake_frame(there.igniters[i], self.frame_maps[k + 1])
-            spacing = max(self.spacing, 0.5 * start[2])
-            ignitions += path_ignitions(start, end, k * self.dt, self.dt, spacing)
+        ignitions = empty_ignitions(here, there, F, None if last else self.frame_maps[k + 1], k,
+                                    self.dt, self.spacing)
         changed = {}
         if self.shell:
-            now = dict(here.dynamics)
-            now["gravity"] = tuple(float(g) for g in moving.direction_to_bake(F, now["gravity"]))
+            now = bake_frame_dynamics(here, F)
             changed = {key: v for key, v in now.items() if self.dynamics.get(key) != v}
             self.dynamics.update(changed)
-        # A mesh igniter lights the cells within its radius of its surface (at least the
-        # surface's sampling, half a cell, so that radius 0 still touches the sheet); its points
-        # and the Flames' positions go into the bake frame as the Empties' do.
-        surfaces = [(moving.to_bake(F, pts), max(radius, self.spacing), k * self.dt)
-                    for pts, radius in (here.surfaces or [])]
-        flames = None
-        if self.flames:  # every frame, so a Flame that goes out stops emitting
-            lit = here.flames or []
-            flames = (moving.to_bake(F, np.array([p for p, _ in lit], dtype=np.float64).reshape(-1, 3)),
-                      np.array([w for _, w in lit], dtype=np.float64))
+        surfaces = surface_ignitions(here, F, k, self.dt, self.spacing)
+        # Every frame, so a Flame that goes out stops emitting.
+        flames = flame_sources(here, F) if self.flames else None
         painted = self.ignite_values if k == self.ignite_index else None
         return FrameTask(index=k, ignitions=ignitions, fields=here.fields,
                          wind_scale=here.wind_scale, frame=here.frame, to_world=F,
@@ -457,20 +508,32 @@ class BakeJob:
         here = self.collider_samples.get(k)
         if not here:
             return None
-        inv = np.linalg.inv(self.frame_maps[k])
-        out = []
-        for c in here:
-            c = dict(c)
-            c["rotation"] = inv[:3, :3] @ c["rotation"]
-            c["translation"] = inv[:3, :3] @ c["translation"] + inv[:3, 3]
-            out.append(c)
-        return out
+        return [collider_in_bake_frame(c, self.frame_maps[k]) for c in here]
 
-    @staticmethod
-    def _in_bake_frame(igniter, F):
-        """An igniter's (world position, strength, radius) with its position in the bake frame."""
-        pos, strength, radius = igniter
-        return moving.to_bake(F, pos[None, :])[0], strength, radius
+    def _await_shape(self, block: bool) -> bool:
+        """Whether the core has said what it made of the sheet (its "built" message, taken
+        here). Frames are sampled only after it: igniter paths and mesh igniters are sampled
+        with the core's cell spacing from the first frame on, so that every bake of a scene
+        (UI, headless, a scene file's) samples alike, however fast the machine."""
+        while self.shape is None and not self.finished:
+            try:
+                msg = self.worker.results.get(block=block, timeout=60.0 if block else None)
+            except queue.Empty:
+                if block and not self.worker.is_alive():
+                    self._fail("the bake thread stopped without a result")
+                if not block:
+                    return False
+                continue
+            if msg[0] == "built":
+                self._built(msg[1])
+            elif msg[0] == "error":
+                self._fail(explain_core_error(msg[1], self.lattice))
+        return self.shape is not None
+
+    def _built(self, shape: dict) -> None:
+        self.shape = shape
+        if shape["spacing"] > 0:
+            self.spacing = 0.5 * shape["spacing"]
 
     def _drain(self, block: bool) -> None:
         while not self.finished:
@@ -482,9 +545,7 @@ class BakeJob:
                 return
             kind = msg[0]
             if kind == "built":
-                self.shape = msg[1]
-                if self.shape["spacing"] > 0:
-                    self.spacing = 0.5 * self.shape["spacing"]
+                self._built(msg[1])
             elif kind == "frame":
                 _, index, positions, lit, particles = msg
                 if self.stretch is not None:

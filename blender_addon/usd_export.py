@@ -19,7 +19,7 @@ from . import cache
 from .fire import CACHE_MODIFIER as FIRE_CACHE_MODIFIER
 from .fire import fire_object_name
 from .file_export import ExportOperator, registrar
-from .inputs import BakeError
+from .inputs import BakeError, transform_animation
 from .materials import ATTR_BURNOUT, ATTR_IGNITE
 
 
@@ -88,10 +88,27 @@ def export_object(obj, path, scene=None) -> str:
             if len(particles) != len(frames):
                 particles = None  # a stale fire cache: leave it out rather than misalign
     fps = scene.render.fps / scene.render.fps_base
-    # The bake's world matrix is the one at its first frame; the cache is in object space.
     return write_usd(path, (counts, indices), frames, positions, fps, char=char, ignition=ignite,
                      burnout=burnout, particles=particles, name=obj.name,
-                     transform=np.array(obj.matrix_world, dtype=np.float64))
+                     transform=world_matrices(obj, scene, frames))
+
+
+def world_matrices(obj, scene, frames):
+    """The sheet's world matrix (4, 4), or one per cached frame (F, 4, 4) when its transform
+    is animated: the cache is in object space, and Blender places it with the matrix of each
+    frame (the bake follows a moving sheet, thinburn.bake_frame)."""
+    if not transform_animation(obj):
+        return np.array(obj.matrix_world, dtype=np.float64)
+    restore = scene.frame_current
+    out = []
+    try:
+        for f in frames:
+            frame = int(np.floor(f))
+            scene.frame_set(frame, subframe=float(f - frame))
+            out.append(np.array(obj.matrix_world, dtype=np.float64))
+    finally:
+        scene.frame_set(restore)
+    return np.array(out)
 
 
 class THINBURN_OT_export_usd(ExportOperator, bpy.types.Operator):

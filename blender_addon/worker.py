@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import fields, moving
+from thinburn import force_fields as fields
 
 MAX_PATH_SAMPLES = 64  # per igniter and frame: bounds the work of a fast-moving igniter
 
@@ -186,20 +186,5 @@ class CoreWorker(threading.Thread):
         self._poses[i] = pose
 
     def _blow(self, sim, task: FrameTask, positions: np.ndarray) -> None:
-        """The force fields at the lattice's control vertices (each its own wind on the motion)
-        and their mean as the uniform wind (the fire front and the particles); without a
-        lattice, the fields at the sheet's centre. Evaluated in the world, turned into the bake
-        frame."""
-        if not task.fields:
-            sim.wind = (0.0, 0.0, 0.0)
-            return
-        F = task.to_world
-        if self._shell:
-            points = np.asarray(sim.lattice_positions(), dtype=np.float64).reshape(-1, 3)
-        else:
-            points = positions.mean(axis=0, keepdims=True)
-        world = fields.wind_at(task.fields, moving.to_world(F, points), task.frame) * task.wind_scale
-        local = moving.direction_to_bake(F, world)
-        if self._shell:
-            sim.set_wind_field(local)
-        sim.wind = tuple(float(c) for c in local.mean(axis=0))
+        """The force fields' wind for the step (thinburn.force_fields.blow)."""
+        fields.blow(sim, task.fields, task.wind_scale, task.frame, task.to_world, positions, self._shell)

@@ -107,6 +107,24 @@ def test_mesh_transform_and_polygons(tmp_path):
     assert not stage.GetPrimAtPath("/ThinBurn/My_Sheet_001_fire")
 
 
+def test_a_moving_sheet_has_a_transform_per_time_code(tmp_path):
+    """An animated sheet's object-space points go under each frame's matrix (time samples)."""
+    tri = [[0, 1, 2]]
+    pos = np.zeros((3, 3, 3), np.float32)
+    pos[:, 1, 0] = 1.0
+    m = np.repeat(np.eye(4)[None], 3, axis=0)
+    m[:, 0, 3] = (0.0, 0.5, 1.0)  # 0.5 m along x per frame
+    path = str(tmp_path / "moving.usda")
+    write_usd(path, tri, [1.0, 2.0, 3.0], pos, 24.0, transform=m)
+    stage = Usd.Stage.Open(path)
+    prim = stage.GetPrimAtPath("/ThinBurn/Sheet")
+    for code, x in ((1.0, 1.0), (2.0, 1.5), (3.0, 2.0)):
+        world = UsdGeom.Xformable(prim).ComputeLocalToWorldTransform(Usd.TimeCode(code))
+        assert tuple(world.Transform((1.0, 0.0, 0.0))) == (x, 0.0, 0.0)
+    with pytest.raises(ValueError, match=r"transform has invalid shape: expected \(4, 4\) or \(3, 4, 4\)"):
+        write_usd(str(tmp_path / "bad.usda"), tri, [1.0, 2.0, 3.0], pos, 24.0, transform=m[:2])
+
+
 def test_bad_input_names_the_argument(tmp_path):
     path = str(tmp_path / "x.usda")
     pos = np.zeros((2, 3, 3), np.float32)

@@ -69,8 +69,9 @@ def write_usd(path, faces, time_codes, positions, fps: float, *, char=None, igni
     positions: (F, n, 3). char: None or (F, n). ignition, burnout: None or (n,) in time codes
     (NEVER or anything above 1e8 for never; use ``times_to_codes`` from seconds).
     particles: None or F pairs (positions (k, 3), temperatures (k,)), k may change.
-    transform: None or the sheet's 4×4 matrix (column vectors, as Blender's matrix_world);
-    the points are then in the sheet's object space.
+    transform: None, the sheet's 4×4 matrix (column vectors, as Blender's matrix_world), or
+    (F, 4, 4), one per time code (a sheet whose transform is animated); the points are then
+    in the sheet's object space.
     """
     Gf, Sdf, Usd, UsdGeom, Vt = _pxr()
     fps = float(fps)
@@ -116,8 +117,7 @@ def write_usd(path, faces, time_codes, positions, fps: float, *, char=None, igni
     mesh.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(counts))
     mesh.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(indices))
     if transform is not None:
-        m = np.asarray(transform, dtype=np.float64).reshape(4, 4)
-        mesh.AddTransformOp().Set(Gf.Matrix4d(m.T.tolist()))  # USD: row vectors
+        _set_transform(mesh.AddTransformOp(), np.asarray(transform, dtype=np.float64), codes, Gf, Usd)
     points = mesh.CreatePointsAttr()
     extent = mesh.CreateExtentAttr()
     api = UsdGeom.PrimvarsAPI(mesh)
@@ -160,6 +160,18 @@ def write_usd(path, faces, time_codes, positions, fps: float, *, char=None, igni
             fextent.Set(Vt.Vec3fArray.FromNumpy(box), tc)
     stage.GetRootLayer().Save()
     return path
+
+
+def _set_transform(op, m: np.ndarray, codes: np.ndarray, Gf, Usd) -> None:
+    """One matrix, or one time sample per time code (USD takes row vectors: transposed)."""
+    if m.shape == (4, 4):
+        op.Set(Gf.Matrix4d(m.T.tolist()))
+        return
+    if m.shape != (len(codes), 4, 4):
+        raise ValueError(f"transform has invalid shape: expected (4, 4) or ({len(codes)}, 4, 4) "
+                         f"but got {m.shape}")
+    for mk, code in zip(m, codes):
+        op.Set(Gf.Matrix4d(mk.T.tolist()), Usd.TimeCode(float(code)))
 
 
 def _prim_name(name: str) -> str:

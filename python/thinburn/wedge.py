@@ -143,10 +143,13 @@ def simulation_for(spec: SceneSpec, values: dict, threads: int = 1):
     material = spec.resolved_material(mat_changes)
     params = {**spec.params, **values}
     pinned = None if spec.pinned is None else np.asarray(spec.pinned)
+    maps = {k: np.asarray(spec.maps[k]) for k in ("speed_map", "fuel_map") if k in spec.maps}
     sim = Simulation(spec.vertices, spec.faces, material=material,
                      cells=int(bake.get("cells", spec.cells)), seed=int(bake.get("seed", spec.seed)),
                      threads=threads, front=spec.front, lattice=spec.lattice, pinned=pinned,
-                     floor=spec.floor, integrator=spec.integrator, shell=bool(spec.shell), **params)
+                     floor=spec.floor, integrator=spec.integrator, shell=bool(spec.shell),
+                     heat_ignites=spec.heat_ignites, finish_within=spec.finish_within,
+                     **maps, **params)
     fps = float(bake.get("fps", spec.fps))
     frames = int(bake.get("frames", spec.frames))
     if fps <= 0 or frames < 1:
@@ -156,26 +159,19 @@ def simulation_for(spec: SceneSpec, values: dict, threads: int = 1):
 
 def run_frames(sim, spec: SceneSpec, fps: float, frames: int, on_frame=None) -> None:
     """Drive a Simulation through the scene's frames as the add-on's bake does: at frame k
-    light the igniters due in [k dt, (k+1) dt), record (``on_frame(k, sim)``), step (not after
-    the last frame)."""
+    light what is due in [k dt, (k+1) dt) (``scene_run.SceneRun``), record (``on_frame(k,
+    sim)``), set the frame's flames, colliders, wind and motion, step (not after the last
+    frame)."""
+    from .scene_run import SceneRun
+
+    run = SceneRun(spec, fps, frames)
     dt = 1.0 / fps
-    igniters = sorted(spec.igniters, key=lambda g: g["time"])
-    nxt = 0
     for k in range(frames):
-        end = (k + 1) * dt
-        while nxt < len(igniters) and igniters[nxt]["time"] < end:
-            g = igniters[nxt]
-            try:
-                sim.ignite(g["point"], time=max(g["time"], sim.time), radius=g["radius"])
-            except ValueError as exc:
-                if "point" not in str(exc):
-                    raise
-                # An igniter off the sheet lights nothing, as in the add-on.
-            nxt += 1
+        run.before_record(sim, k)
         if on_frame is not None:
             on_frame(k, sim)
         if k < frames - 1:
-            sim.wind = spec.wind_at(k)
+            run.before_step(sim, k)
             sim.step(dt)
 
 
@@ -194,10 +190,13 @@ def _bake(scene, values, folder, render_frames, key, label, usd) -> dict:
     aspect = dv / du
 
     def record(k, s):
+        # In the world: a moving sheet's scene is simulated in its bake frame (to_world).
+        positions = spec.in_world(k, s.vertex_positions())
         store["time"].append(s.time)
-        store["vertex_positions"].append(s.vertex_positions().astype(np.float32))
+        store["vertex_positions"].append(positions.astype(np.float32))
         store["vertex_char"].append(s.vertex_char().astype(np.float32))
         p, t = s.particles() if spec.shell else (np.zeros((0, 3)), np.zeros(0))
+        p = spec.in_world(k, np.asarray(p).reshape(-1, 3))
         particles.append(np.column_stack([p, t]).astype(np.float32))
         if k in render_frames:
             states = s.cell_states()
@@ -205,7 +204,7 @@ def _bake(scene, values, folder, render_frames, key, label, usd) -> dict:
             vstate = np.where(s.time < ign, 0, np.where(s.time < out, 1, 2)).astype(np.uint8)
             cells = render.cell_image(states, s.cell_char(), s.inside(), spec.material_name(),
                                       aspect, width=120)
-            pictures.append(renderer.frame(s.vertex_positions(), s.vertex_char(), vstate, cells,
+            pictures.append(renderer.frame(positions, s.vertex_char(), vstate, cells,
                                            (p, t), title=f"t = {s.time:5.2f} s"))
 
     try:

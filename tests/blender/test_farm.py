@@ -139,6 +139,29 @@ def test_usd_export_of_a_baked_sheet(addon, tmp_path):
     assert len(temp.Get(Usd.TimeCode(10))) == len(fire.GetPointsAttr().Get(Usd.TimeCode(10)))
 
 
+def test_usd_export_of_a_moving_sheet_follows_its_transform(addon, tmp_path):
+    """The cache is in object space; the USD places it with each frame's matrix, as Blender
+    does (it was the matrix of the frame the export ran at, for every frame)."""
+    from pxr import Usd, UsdGeom
+    sheet = make_sheet(n=9, size=0.2, z=0.0)
+    make_igniter(sheet, (-0.1, -0.1, 0.0), lit_from=1, radius=0.04)
+    setup_bake(sheet, frames=10, cells=16, cache_dir=tmp_path / "cache")
+    for frame, x in ((1, 0.0), (10, 0.3)):
+        sheet.location = (x, 0.0, 0.0)
+        sheet.keyframe_insert("location", frame=frame)
+    assert bpy.ops.thinburn.bake() == {"FINISHED"}
+    bpy.context.scene.frame_set(4)
+    path = str(tmp_path / "moving.usda")
+    assert bpy.ops.thinburn.export_usd(filepath=path) == {"FINISHED"}
+    stage = Usd.Stage.Open(path)
+    prim = stage.GetPrimAtPath("/ThinBurn/Sheet")
+    for frame in (1, 7, 10):
+        bpy.context.scene.frame_set(frame)
+        want = float(sheet.matrix_world.translation.x)
+        got = UsdGeom.Xformable(prim).ComputeLocalToWorldTransform(Usd.TimeCode(frame)).ExtractTranslation()
+        assert got[0] == pytest.approx(want, abs=1e-7) and (frame == 1) == (want == 0.0)
+
+
 def test_scene_export_bakes_outside_blender_as_the_addon_does(addon, tmp_path):
     from thinburn import scenefile, wedge
     sheet = make_sheet(n=9, size=0.2, z=0.0)

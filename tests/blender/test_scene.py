@@ -11,6 +11,8 @@ import pytest
 
 bpy = pytest.importorskip("bpy")
 
+from thinburn import force_fields  # noqa: E402
+
 from blender_helpers import (evaluated_positions, make_igniter, make_sheet,  # noqa: E402
                              modal_harness, point_attribute, setup_bake, worker_busy)
 
@@ -33,7 +35,7 @@ def test_a_point_wind_falls_off_as_blender_says(addon):
     spec = addon.inputs.field_spec(ob)
     pts = np.array([[0.05, 0, 0], [0, 0.5, 0], [0, 0, -0.8], [1.5, 0, 0]])
     expect = 3.0 * np.array([1.0, 1.4 ** -2, 1.7 ** -2, 0.0])
-    w = addon.fields.wind_at([spec], pts, frame=1)
+    w = force_fields.wind_at([spec], pts, frame=1)
     np.testing.assert_allclose(w[:, 0], expect, rtol=1e-6)  # along the field's Z = world +x
     np.testing.assert_allclose(w[:, 1:], 0.0, atol=1e-6)
 
@@ -42,18 +44,18 @@ def test_a_plane_wind_measures_from_its_plane_and_z_direction_cuts_a_side(addon)
     ob = _field(shape="PLANE", strength=2.0, falloff_power=1.0, z_direction="POSITIVE")
     spec = addon.inputs.field_spec(ob)
     pts = np.array([[0, 0, 0.5], [7.0, -3.0, 0.5], [0, 0, -0.5]])
-    w = addon.fields.wind_at([spec], pts, frame=1)
+    w = force_fields.wind_at([spec], pts, frame=1)
     np.testing.assert_allclose(w[:, 2], [2 / 1.5, 2 / 1.5, 0.0], rtol=1e-6)
 
 
 def test_tube_and_cone_falloffs_split_along_and_across_the_axis(addon):
     tube = addon.inputs.field_spec(_field(shape="POINT", falloff_type="TUBE", falloff_power=1.0,
                                           radial_falloff=1.0))
-    w = addon.fields.wind_at([tube], np.array([[0.4, 0.0, 0.3]]), frame=1)
+    w = force_fields.wind_at([tube], np.array([[0.4, 0.0, 0.3]]), frame=1)
     np.testing.assert_allclose(w[0, 2], 1 / (1.3 * 1.4), rtol=1e-6)
     cone = addon.inputs.field_spec(_field(shape="POINT", falloff_type="CONE", falloff_power=0.0,
                                           use_radial_max=True, radial_max=30.0))
-    w = addon.fields.wind_at([cone], np.array([[0.1, 0, 1.0], [1.0, 0, 1.0]]), frame=1)
+    w = force_fields.wind_at([cone], np.array([[0.1, 0, 1.0], [1.0, 0, 1.0]]), frame=1)
     np.testing.assert_allclose(w[:, 2], [1.0, 0.0], atol=1e-9)  # 5.7° inside, 45° outside
 
 
@@ -61,9 +63,9 @@ def test_noise_follows_blenders_law_and_its_seed(addon):
     ob = _field(shape="PLANE", strength=1.0, noise=2.0, seed=7)
     spec = addon.inputs.field_spec(ob)
     pts = np.zeros((40000, 3))
-    a = addon.fields.wind_at([spec], pts, frame=3)[:, 2]
-    assert np.array_equal(a, addon.fields.wind_at([spec], pts, frame=3)[:, 2])
-    assert not np.array_equal(a, addon.fields.wind_at([spec], pts, frame=4)[:, 2])
+    a = force_fields.wind_at([spec], pts, frame=3)[:, 2]
+    assert np.array_equal(a, force_fields.wind_at([spec], pts, frame=3)[:, 2])
+    assert not np.array_equal(a, force_fields.wind_at([spec], pts, frame=4)[:, 2])
     # wind_func: ±r/f × noise/128, r in 0..127, f in [1, 2): |extra| < noise; its mean is
     # (sum 65..127 - sum 0..64)/128 × ln 2 × noise/128 = 0.1679 × noise (measured 0.337 here).
     assert np.abs(a - 1.0).max() < 2.0
@@ -77,11 +79,11 @@ def test_turbulence_is_bounded_smooth_and_ends_at_max_distance(addon):
     rng = np.random.default_rng(0)
     pts = rng.uniform(-0.7, 0.7, (2000, 3))
     pts = pts[np.linalg.norm(pts, axis=1) < 1.0]
-    w = addon.fields.wind_at([spec], pts, frame=1)
+    w = force_fields.wind_at([spec], pts, frame=1)
     assert np.abs(w).max() <= 2.0 and w.std() > 0.05  # -1 + 2 × turbulence in [0, 1], × 2
-    near = addon.fields.wind_at([spec], pts + 1e-4, frame=1)
+    near = force_fields.wind_at([spec], pts + 1e-4, frame=1)
     assert np.abs(near - w).max() < 0.01  # a smooth noise, not a random draw per point
-    far = addon.fields.wind_at([spec], np.array([[1.2, 0, 0], [0, 0, -3]]), frame=1)
+    far = force_fields.wind_at([spec], np.array([[1.2, 0, 0], [0, 0, -3]]), frame=1)
     assert np.array_equal(far, np.zeros((2, 3)))
 
 

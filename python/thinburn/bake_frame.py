@@ -1,4 +1,5 @@
-"""The frame a bake simulates in when the sheet's own transform is animated (no bpy here).
+"""The frame a bake simulates in when the sheet's own transform is animated (the Blender
+add-on's bake, and a scene file's ``to_world``).
 
 The core simulates in the *bake frame*: the world as it was at Start, carried along by the
 sheet's transform. At frame k the map from it to the world is F_k = M_k M_0^-1 (M: the sheet's

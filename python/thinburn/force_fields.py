@@ -1,7 +1,9 @@
-"""Blender's Wind and Turbulence force fields as wind on a sheet (no bpy here).
+"""Blender's Wind and Turbulence force fields as wind on a sheet.
 
-inputs.field_specs reads each field into a ``FieldSpec`` (plain numbers); ``wind_at`` gives the
-wind they make at world points. The formulas follow Blender's effector code
+The Blender add-on (blender_addon/inputs.py, ``field_spec``) reads each field into a
+``FieldSpec`` (plain numbers), and a scene file holds them per frame (thinburn.scenefile);
+``wind_at`` gives the wind they make at world points, ``blow`` sets it on a Simulation before
+a step, as the add-on's bake and thinburn.scene_run both do. The formulas follow Blender's effector code
 (source/blender/blenkernel/intern/effect.cc: get_effector_data, effector_falloff,
 falloff_func, do_physical_effector, wind_func); docs/blender.md writes them out. Blender's
 cloth takes a field's force as the wind's velocity, and so does ThinBurn (times Wind Scale).
@@ -11,6 +13,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+
+from . import bake_frame
 
 
 @dataclass(frozen=True)
@@ -177,3 +181,24 @@ def improved_perlin(p: np.ndarray, perm: np.ndarray) -> np.ndarray:
     y0 = x00 + v * (x10 - x00)
     y1 = x01 + v * (x11 - x01)
     return y0 + w * (y1 - y0)
+
+
+# --- the wind on a Simulation -----------------------------------------------------------------
+def blow(sim, specs, wind_scale: float, frame: int, to_world, positions, shell: bool) -> None:
+    """Set the fields' wind on ``sim`` for its next step: with a lattice (``shell``), at each
+    control vertex (``set_wind_field``, each its own wind on the motion) and their mean as the
+    uniform wind (the fire front and the particles); without, the fields at the sheet's centre
+    (``positions``: its vertices now). Evaluated in the world (``to_world``: the bake frame's
+    map, bake_frame.py), turned into the bake frame. No fields: no wind."""
+    if not specs:
+        sim.wind = (0.0, 0.0, 0.0)
+        return
+    if shell:
+        points = np.asarray(sim.lattice_positions(), dtype=np.float64).reshape(-1, 3)
+    else:
+        points = np.asarray(positions, dtype=np.float64).mean(axis=0, keepdims=True)
+    world = wind_at(specs, bake_frame.to_world(to_world, points), frame) * wind_scale
+    local = bake_frame.direction_to_bake(to_world, world)
+    if shell:
+        sim.set_wind_field(local)
+    sim.wind = tuple(float(c) for c in local.mean(axis=0))
