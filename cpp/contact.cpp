@@ -306,9 +306,6 @@ double Contacts::friction_reserve(int v, const Eigen::Vector3d& f) const {
   ColliderHit hit;
   if (collider_contact(x.row(v).transpose(), hit))
     reserve = std::max(reserve, reserve_on(hit.normal, hit.friction, f));
-  Eigen::Vector3d n;
-  double mu;
-  if (shell_ && shell_->support(v, n, mu)) reserve = std::max(reserve, reserve_on(n, mu, f));
   return reserve;
 }
 
@@ -325,11 +322,6 @@ Eigen::Vector3d Contacts::supported(int v, Eigen::Vector3d f) const {
   // friction takes up to friction times that of the tangential force.
   ColliderHit hit;
   if (collider_contact(x.row(v).transpose(), hit)) f = held_by(hit.normal, hit.friction, f);
-  // So do the shell's samples that pushed the vertex out in the last substep that moved it: a
-  // sheet lying on a rod narrower than a control cell rests on it through them alone.
-  Eigen::Vector3d n;
-  double mu;
-  if (shell_ && shell_->support(v, n, mu)) f = held_by(n, mu, f);
   return f;
 }
 

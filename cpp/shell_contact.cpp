@@ -88,20 +88,18 @@ bool ShellContact::push_out(int s, const Colliders& colliders, const ColliderMot
     const double f = share_[k] / W;
     x.row(v[k]) += f * dp.transpose();
     vel.row(v[k]) += f * du.transpose();
-    hold(v[k], f * depth * c.n, hit.friction);
+    hold(v[k], f * depth * c.n);
   }
   return true;
 }
 
-void ShellContact::hold(int v, const Eigen::Vector3d& push, double friction) {
+void ShellContact::hold(int v, const Eigen::Vector3d& push) {
   if (!listed_[v]) {
     listed_[v] = 1;
     support_list_.push_back(v);
     support_.row(v).setZero();
-    support_friction_[v] = 0.0;
   }
   support_.row(v) += push.transpose();
-  support_friction_[v] = std::max(support_friction_[v], friction);
 }
 
 double ShellContact::substeps(double dt, double g, const RowMatX3& vel, const std::vector<int>& slot,
@@ -151,14 +149,6 @@ void ShellContact::begin_substep(const std::vector<int>& slot) {
   support_list_.resize(kept);
 }
 
-bool ShellContact::support(int v, Eigen::Vector3d& normal, double& friction) const {
-  if (v >= support_.rows() || !listed_[v]) return false;
-  const double l = support_.row(v).norm();
-  if (!(l > 0.0)) return false;
-  normal = support_.row(v).transpose() / l;
-  friction = support_friction_[v];
-  return true;
-}
 
 int ShellContact::apply(const Colliders& colliders, const ColliderMotion& motion, double margin, double h,
                         const RowMatX3& x_begin, RowMatX3& x, RowMatX3& vel, const Eigen::VectorXd& mass,
@@ -168,7 +158,6 @@ int ShellContact::apply(const Colliders& colliders, const ColliderMotion& motion
   // on a face by about as many depths as it has samples in contact).
   if (support_.rows() != x.rows()) {
     support_ = RowMatX3::Zero(x.rows(), 3);
-    support_friction_.assign(x.rows(), 0.0);
     listed_.assign(x.rows(), 0);
     support_list_.clear();
   }

@@ -52,13 +52,8 @@ class ShellContact {
   /// over their length. shortest(v) is vertex v's shortest spring in the sheet's plane.
   double substeps(double dt, double g, const RowMatX3& vel, const std::vector<int>& slot,
                   const std::function<double(int)>& shortest) const;
-  /// @brief A substep starts: forget the supports of the vertices it moves (slot[v] >= 0); a
-  /// sleeper keeps the one it fell asleep on.
+  /// @brief A substep starts: forget the pushes on the vertices it moves (slot[v] >= 0).
   void begin_substep(const std::vector<int>& slot);
-  /// @brief Whether the samples held control vertex v up in the last substep that moved it; if
-  /// so, the mean normal of those pushes (weighted by v's share of each) and the largest
-  /// friction among their colliders, for sleeping (Contacts::supported).
-  bool support(int v, Eigen::Vector3d& normal, double& friction) const;
 
  private:
   bool group_may_touch(int g, const Colliders& colliders, double margin, const RowMatX3& x,
@@ -66,16 +61,15 @@ class ShellContact {
   bool push_out(int s, const Colliders& colliders, const ColliderMotion& motion, double margin, double h,
                 const RowMatX3& x_begin, RowMatX3& x, RowMatX3& vel, const Eigen::VectorXd& mass,
                 const std::vector<int>& slot);
-  void hold(int v, const Eigen::Vector3d& push, double friction);
+  void hold(int v, const Eigen::Vector3d& push);
 
   ContactSamples s_;
   unsigned sweeps_ = 0;        // apply() calls so far: odd ones sweep the samples backwards
   std::vector<double> share_;  // scratch: per stencil vertex, w m^-1 / sum w^2 m^-1
-  // Per control vertex (sized on the first apply): the sum of its share of each push times the
-  // push's depth along the push's normal, and the largest friction of those pushes; valid where
+  // Per control vertex (sized on the first apply): the sum of its share of each push of the
+  // last substep that moved it times the push's depth along the push's normal; valid where
   // listed_. support_list_ holds the listed vertices, so a substep forgets them in O(listed).
   RowMatX3 support_;
-  std::vector<double> support_friction_;
   std::vector<std::uint8_t> listed_;
   std::vector<int> support_list_;
 };
