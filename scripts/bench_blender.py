@@ -22,23 +22,7 @@ import tempfile
 import time
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parent.parent
-ADDON_NAME = "thinburn_addon"
-
-
-def enable_addon(user_dir: Path):
-    """Load bpy with throwaway user folders and enable the add-on from this checkout."""
-    os.environ["BLENDER_USER_RESOURCES"] = str(user_dir)
-    addons = user_dir / "scripts" / "addons"
-    addons.mkdir(parents=True)
-    (addons / ADDON_NAME).symlink_to(ROOT / "blender_addon", target_is_directory=True)
-    import bpy  # noqa: F401  (first: it puts Blender's modules on the path)
-    import addon_utils
-
-    def fail(exc):
-        raise exc
-
-    addon_utils.enable(ADDON_NAME, default_set=True, handle_error=fail)
+from blender_session import ROOT, enable_addon
 
 
 def grid(name: str, n: int, size: float = 1.0, z: float = 1.0):

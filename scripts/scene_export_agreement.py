@@ -16,29 +16,11 @@ space, m); then the same second scene without its force fields (to show they mov
 from __future__ import annotations
 
 import json
-import os
 import sys
 import tempfile
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parent.parent
-ADDON_NAME = "thinburn_addon"
-
-
-def enable_addon(user_dir: Path):
-    """Load bpy with throwaway user folders and enable the add-on from this checkout."""
-    os.environ["BLENDER_USER_RESOURCES"] = str(user_dir)
-    addons = user_dir / "scripts" / "addons"
-    addons.mkdir(parents=True)
-    (addons / ADDON_NAME).symlink_to(ROOT / "blender_addon", target_is_directory=True)
-    import bpy  # noqa: F401  (first: it puts Blender's modules on the path)
-    import addon_utils
-
-    def fail(exc):
-        raise exc
-
-    addon_utils.enable(ADDON_NAME, default_set=True, handle_error=fail)
-    return sys.modules[ADDON_NAME]
+from blender_session import ROOT, enable_addon
 
 
 def without_fields(scene):

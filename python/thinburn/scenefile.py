@@ -103,9 +103,7 @@ class SceneSpec:
         if isinstance(mat, dict):
             d = dict(mat)
             base = resolve_material(d.pop("preset", "paper"))
-            unknown = sorted(set(d) - set(MATERIAL_FIELDS))
-            if unknown:
-                raise ValueError(f"material: unknown fields {unknown}; fields are {list(MATERIAL_FIELDS)}")
+            _no_unknown(d, MATERIAL_FIELDS, "material", "fields")
             base = base.with_(**d)
         else:
             base = resolve_material(mat)
@@ -181,9 +179,7 @@ def from_dict(d: dict, source: str = "scene") -> SceneSpec:
     verts = V.real_array(d.get("vertices"), "vertices", (-1, 3))
     faces = V.index_array(d.get("faces"), "faces", (-1, 3), len(verts))
     settings = dict(d.get("settings") or {})
-    unknown = sorted(set(settings) - set(SETTINGS))
-    if unknown:
-        raise ValueError(f"{source}: unknown settings {unknown}; settings are {list(SETTINGS)}")
+    _no_unknown(settings, SETTINGS, source, "settings")
     igniters = [_igniter(g, f"igniters[{i}]") for i, g in enumerate(d.get("igniters") or [])]
     spec = SceneSpec(verts, faces, material=d.get("material", "paper"), igniters=igniters,
                      name=str(d.get("name", "Sheet")), params=dict(d.get("params") or {}))
@@ -259,9 +255,7 @@ def _field_spec(f, name: str) -> dict:
     if not isinstance(f, dict):
         raise TypeError(f"{name} must be an object of FieldSpec values, got {type(f).__name__}")
     known = [x.name for x in dataclass_fields(FieldSpec)]
-    unknown = sorted(set(f) - set(known))
-    if unknown:
-        raise ValueError(f"{name}: unknown field settings {unknown}; they are {known}")
+    _no_unknown(f, known, name, "field settings")
     V.choice(f.get("kind"), f"{name}.kind", ("WIND", "TURBULENCE"))
     V.choice(f.get("shape"), f"{name}.shape", ("POINT", "LINE", "PLANE"))
     V.choice(f.get("z_direction"), f"{name}.z_direction", ("BOTH", "POSITIVE", "NEGATIVE"))
@@ -275,12 +269,17 @@ def _field_spec(f, name: str) -> dict:
     return dict(f)
 
 
+def _no_unknown(given, known, name: str, what: str) -> None:
+    """A ValueError naming the keys of ``given`` that are not in ``known``, and the known ones."""
+    unknown = sorted(set(given) - set(known))
+    if unknown:
+        raise ValueError(f"{name}: unknown {what} {unknown}; {what} are {list(known)}")
+
+
 def _maps(maps, n: int) -> dict:
     if not isinstance(maps, dict):
         raise TypeError(f"maps must be an object of per-vertex arrays, got {type(maps).__name__}")
-    unknown = sorted(set(maps) - set(MAPS))
-    if unknown:
-        raise ValueError(f"maps: unknown maps {unknown}; maps are {list(MAPS)}")
+    _no_unknown(maps, MAPS, "maps", "maps")
     out = {}
     for key, values in maps.items():
         a = V.real_array(values, f"maps.{key}", (n,))
@@ -318,9 +317,7 @@ def _flame_rows(rows, name: str) -> list:
 def _dynamics(values, name: str) -> dict:
     if not isinstance(values, dict):
         raise TypeError(f"{name} must be an object of motion parameters, got {type(values).__name__}")
-    unknown = sorted(set(values) - set(DYNAMICS))
-    if unknown:
-        raise ValueError(f"{name}: unknown motion parameters {unknown}; they are {list(DYNAMICS)}")
+    _no_unknown(values, DYNAMICS, name, "motion parameters")
     return {k: (V.vector3(v, f"{name}.{k}").tolist() if k == "gravity" else V.real(v, f"{name}.{k}"))
             for k, v in values.items()}
 
