@@ -123,8 +123,8 @@ def test_cloth_draped_on_a_ball_stays_on_it(friction, bound):
     # Each sample's push goes along its own normal, which on a curved collider slides its
     # neighbours along the surface; friction held back only the velocity's share of that, and
     # the cloth crept off the ball. Measured (scripts/collider_friction.py, seconds 4 to 8, the
-    # top's mean speed): friction 2: 0.03 mm/s (6.08 before the samples' positional friction and
-    # symmetric sweeps); friction 0.5: 1.18 mm/s (23.4 before), its hanging sides still swinging.
+    # top's mean speed): friction 2: 0.04 mm/s (6.08 before the samples' positional friction and
+    # symmetric sweeps); friction 0.5: 1.06 mm/s (23.4 before), its hanging sides still swinging.
     sim = thinburn.Simulation(*rect_sheet(1.0, 1.0, nx=49, ny=49, z=0.32), cells=32, lattice=12,
                               material="cloth", **QUIET)
     sim.set_colliders(spheres=[dict(centre=(0.5, 0.5, 0.0), radius=0.3, friction=friction)])
