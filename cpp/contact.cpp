@@ -272,7 +272,8 @@ int Contacts::contact_substeps(double dt) const {
     need = std::max(need, contact_travel_substeps(dt, s, g, kContactTravel * L));
   }
   if (shell_)
-    need = std::max(need, shell_->substeps(dt, g, s_.vel, s_.slot, [this](int v) { return shortest_spring(v); }));
+    need = std::max(need, shell_->substeps(*colliders_, collider_margin_, dt, g, x, s_.vel, s_.slot,
+                                           [this](int v) { return shortest_spring(v); }));
   return static_cast<int>(std::min(need, double(s_.p.max_substeps)));
 }
 

@@ -102,38 +102,53 @@ void ShellContact::hold(int v, const Eigen::Vector3d& push) {
   support_.row(v) += push.transpose();
 }
 
-double ShellContact::substeps(double dt, double g, const RowMatX3& vel, const std::vector<int>& slot,
+double ShellContact::substeps(const Colliders& colliders, double margin, double dt, double g, const RowMatX3& x,
+                              const RowMatX3& vel, const std::vector<int>& slot,
                               const std::function<double(int)>& shortest) const {
-  // Under gravity alone a sample at rest falls |g| h^2 a substep: that is kept within
-  // kSampleTravel of the stencil's shortest spring. Without it a cloth hanging on a 1 cm rod
-  // took 1 substep a step, squashed its springs by 28 % and was redone with 29 (the next step
-  // with 2: 36 %, redone with 72): every step paid twice, and the sheet jittered at 1-2 mm/s
-  // (median vertex) for good. The bound is not the redo's 1 %: measured on that rod after 4-6 s
-  // (median / largest vertex speed), 0.5 % took 8 substeps and the sheet swung along the rod at
-  // 10-17 / 40 mm/s; 0.2 %: 12, 0.8-1.0 / 20 mm/s; 0.05 %: 23, 0.3 / 2.4 mm/s (the strip over a
-  // box's edge: 72 substeps, 0.2 / 0.7 mm/s at 4 s). An impact's own travel, s h, has the
-  // control vertices' bound (kContactTravel in contact.cpp). Only stencils that samples held
-  // in the last substep count: the first step of a landing takes what the rest needs (and the
-  // redo rule), and a sheet whose control vertices carry it (cloth on a large sphere) pays
-  // nothing: counted whenever near, there it took 24 substeps and crept at 0.6 mm/s.
+  // Under gravity alone a sample at rest falls |g| h^2 a substep: where samples hold a stencil,
+  // that is kept within kSampleTravel of the stencil's shortest spring. Without it a cloth
+  // hanging on a 1 cm rod took 1 substep a step, squashed its springs by 28 % and was redone
+  // with 29 (the next step with 2: 36 %, redone with 72): every step paid twice, and the sheet
+  // jittered at 1-2 mm/s (median vertex) for good. The bound is not the redo's 1 %: measured on
+  // that rod after 4-6 s (median / largest vertex speed), 0.5 % took 8 substeps and the sheet
+  // swung along the rod at 10-17 / 40 mm/s; 0.2 %: 12, 0.8-1.0 / 20 mm/s; 0.05 %: 23, 1.2 / 4
+  // mm/s (docs/dynamics.md §3.2). Only held stencils get it: counted whenever near, cloth on a
+  // 1 m sphere, which its control vertices carry, took 24 substeps and crept at 0.6 mm/s.
+  // A stencil moving into a collider, held or about to be, keeps its travel s h within the
+  // control vertices' bound (kContactTravel in contact.cpp), so a landing's first step does not
+  // take what the rest of the sheet needs.
   constexpr double kSampleTravel = 5e-4, kImpactTravel = 0.1;
   double need = 1.0;
-  if (support_list_.empty()) return need;  // none held (or no apply yet: listed_ unsized)
+  const bool any_held = !support_list_.empty();  // listed_ is unsized before the first apply
   const int groups = static_cast<int>(s_.group.size()) - 1;
   for (int gi = 0; gi < groups; ++gi) {
     const std::size_t at = std::size_t(s_.group[gi]) * s_.stencil;
     const int* v = s_.vertex.data() + at;
     const double* w = s_.weight.data() + at;
-    bool held = false;
-    double L = std::numeric_limits<double>::infinity(), inward = 0.0;
+    bool awake = false, held = false;
+    double L = std::numeric_limits<double>::infinity(), speed = 0.0, inward = 0.0;
+    Eigen::Vector3d lo = Eigen::Vector3d::Constant(INFINITY), hi = -lo;
     for (int k = 0; k < s_.stencil; ++k) {
-      if (w[k] == 0.0 || slot[v[k]] < 0 || !listed_[v[k]]) continue;
-      held = true;
+      if (w[k] == 0.0) continue;
+      lo = lo.cwiseMin(x.row(v[k]).transpose());
+      hi = hi.cwiseMax(x.row(v[k]).transpose());
+      if (slot[v[k]] < 0) continue;
+      awake = true;
       L = std::min(L, shortest(v[k]));
-      inward = std::max(inward, -vel.row(v[k]).dot(support_.row(v[k]).normalized()));
+      speed = std::max(speed, vel.row(v[k]).norm());
+      if (any_held && listed_[v[k]]) {
+        held = true;
+        inward = std::max(inward, -vel.row(v[k]).dot(support_.row(v[k]).normalized()));
+      }
     }
-    if (!held || !std::isfinite(L)) continue;
-    if (g > 0.0) need = std::max(need, std::ceil(dt / std::sqrt(kSampleTravel * L / g)));
+    if (!awake || !std::isfinite(L)) continue;
+    if (held && g > 0.0) need = std::max(need, std::ceil(dt / std::sqrt(kSampleTravel * L / g)));
+    if (!held && speed > 0.0) {
+      const ColliderHit hit = colliders.query(0.5 * (lo + hi));
+      if (!(hit.distance < margin + kLipschitz * s_.spread * 0.5 * (hi - lo).norm() + speed * dt)) continue;
+      for (int k = 0; k < s_.stencil; ++k)
+        if (w[k] != 0.0 && slot[v[k]] >= 0) inward = std::max(inward, -vel.row(v[k]).dot(hit.normal));
+    }
     need = std::max(need, std::ceil(dt * inward / (kImpactTravel * L)));
   }
   return need;

@@ -46,11 +46,13 @@ class ShellContact {
             const RowMatX3& x_begin, RowMatX3& x, RowMatX3& vel, const Eigen::VectorXd& mass,
             const std::vector<int>& slot);
 
-  /// @brief Substeps of a step dt (>= 1) that the stencils the samples held in the last substep
-  /// need: the solve does not know the collider, so the whole sheet falls in it, and the push
-  /// back moves only the stencils in contact, which strains their springs to the rest by the fall
-  /// over their length. shortest(v) is vertex v's shortest spring in the sheet's plane.
-  double substeps(double dt, double g, const RowMatX3& vel, const std::vector<int>& slot,
+  /// @brief Substeps of a step dt (>= 1) that the samples need: where they held a stencil in the
+  /// last substep, the solve (which does not know the collider) lets the whole sheet fall, and
+  /// the push back moves only the stencils in contact, straining their springs to the rest by
+  /// the fall over their length; a stencil moving into a collider must not pass too far within a
+  /// substep. shortest(v) is vertex v's shortest spring in the sheet's plane.
+  double substeps(const Colliders& colliders, double margin, double dt, double g, const RowMatX3& x,
+                  const RowMatX3& vel, const std::vector<int>& slot,
                   const std::function<double(int)>& shortest) const;
   /// @brief A substep starts: forget the pushes on the vertices it moves (slot[v] >= 0).
   void begin_substep(const std::vector<int>& slot);

@@ -65,8 +65,10 @@ def test_stretch_is_kept_and_bending_is_scaled_by_the_share():
 def test_a_soft_cloth_drapes_over_a_sphere():
     # Issue #12: cloth laid on a 25 cm sphere barely drapes with the lattice's own bending.
     # An 80 cm cloth dropped 2 cm onto the sphere, 2 s: with the preset's soft bending its
-    # lowest point is measured at -0.170 m (the corners hang 0.42 m below the top); with
-    # flexural_rigidity=0 at +0.089 m (it stands out like a board). Both rest on the top
+    # lowest point is measured at -0.168 m (the corners hang 0.42 m below the top); with
+    # flexural_rigidity=0 at -0.075 m (27 substeps a step; -0.077 and -0.065 at 10 and 40: the
+    # +0.089 m, "like a board", measured before the shell samples had their own substeps came
+    # from taking few). Both rest on the top
     # (the collider acts on the 13 x 13 lattice's vertices). Before the preset's strain limit
     # (3 %, docs/dynamics.md §3.4) the soft cloth stretched as it draped and hung to -0.191 m,
     # the stiff one stood at +0.151 m.
@@ -80,5 +82,5 @@ def test_a_soft_cloth_drapes_over_a_sphere():
         sim.set_colliders(spheres=[dict(centre=(0.0, 0.0, 0.0), radius=0.25, friction=0.5)])
         sim.run(2.0, dt=1 / 24)
         low[B], high[B] = sim.vertex_positions()[:, 2].min(), sim.vertex_positions()[:, 2].max()
-    assert low[None] < -0.14 and low[0.0] > 0.06
+    assert low[None] < -0.14 and low[0.0] > -0.10
     assert min(high.values()) > 0.25
