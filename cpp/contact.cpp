@@ -277,26 +277,6 @@ int Contacts::contact_substeps(double dt) const {
   return static_cast<int>(std::min(need, double(s_.p.max_substeps)));
 }
 
-namespace {
-
-// What a support of normal n and Coulomb coefficient mu leaves of force f: nothing of an inward
-// push, and the tangential part only beyond what static friction (mu times the push) takes.
-Eigen::Vector3d held_by(const Eigen::Vector3d& n, double mu, const Eigen::Vector3d& f) {
-  const double fn = f.dot(n);
-  if (!(fn < 0.0)) return f;
-  const Eigen::Vector3d ft = f - fn * n;
-  return coulomb_keep(ft.norm(), mu, -fn) * ft;
-}
-
-// What static friction on that support could still take beyond f's tangential part (-inf when
-// f does not press on it).
-double reserve_on(const Eigen::Vector3d& n, double mu, const Eigen::Vector3d& f) {
-  const double fn = f.dot(n);
-  return fn < 0.0 ? mu * -fn - (f - fn * n).norm() : -std::numeric_limits<double>::infinity();
-}
-
-}  // namespace
-
 double Contacts::friction_reserve(int v, const Eigen::Vector3d& f) const {
   // What static friction could still take beyond f's tangential part: friction times the
   // inward push, less that part (negative once f slides the vertex; -inf off any support).
@@ -305,8 +285,10 @@ double Contacts::friction_reserve(int v, const Eigen::Vector3d& f) const {
   if (s_.p.has_floor && x(v, 2) <= floor_at(v) && f.z() < 0.0)
     reserve = s_.p.friction * -f.z() - std::hypot(f.x(), f.y());
   ColliderHit hit;
-  if (collider_contact(x.row(v).transpose(), hit))
-    reserve = std::max(reserve, reserve_on(hit.normal, hit.friction, f));
+  if (collider_contact(x.row(v).transpose(), hit)) {
+    const double fn = f.dot(hit.normal);
+    if (fn < 0.0) reserve = std::max(reserve, hit.friction * -fn - (f - fn * hit.normal).norm());
+  }
   return reserve;
 }
 
@@ -322,7 +304,13 @@ Eigen::Vector3d Contacts::supported(int v, Eigen::Vector3d f) const {
   // A collider holds a vertex resting on it the same way: the inward push is taken, and static
   // friction takes up to friction times that of the tangential force.
   ColliderHit hit;
-  if (collider_contact(x.row(v).transpose(), hit)) f = held_by(hit.normal, hit.friction, f);
+  if (collider_contact(x.row(v).transpose(), hit)) {
+    const double fn = f.dot(hit.normal);
+    if (fn < 0.0) {
+      const Eigen::Vector3d ft = f - fn * hit.normal;
+      f = coulomb_keep(ft.norm(), hit.friction, -fn) * ft;
+    }
+  }
   return f;
 }
 

@@ -79,10 +79,10 @@ bool ShellContact::push_out(int s, const Colliders& colliders, const ColliderMot
   // it, each along its own normal, did to it. On a curved collider those normals differ, and
   // each push slid its neighbours a little along the surface with no speed to stop: cloth
   // draped on a sphere crept off it at 2-6 mm/s (docs/dynamics.md §3.2).
-  const Eigen::Vector3d out = (margin - hit.distance) * c.n;
+  const double depth = margin - hit.distance;
+  const Eigen::Vector3d out = depth * c.n;
   const Eigen::Vector3d dp = positional_friction(p + out, p0 + h * vc, out, hit) - p;
   const Eigen::Vector3d du = c.after() - u;
-  const double depth = margin - hit.distance;
   for (int k = 0; k < K; ++k) {
     if (share_[k] == 0.0) continue;
     const double f = share_[k] / W;
@@ -163,7 +163,6 @@ void ShellContact::begin_substep(const std::vector<int>& slot) {
       support_list_[kept++] = v;
   support_list_.resize(kept);
 }
-
 
 int ShellContact::apply(const Colliders& colliders, const ColliderMotion& motion, double margin, double h,
                         const RowMatX3& x_begin, RowMatX3& x, RowMatX3& vel, const Eigen::VectorXd& mass,

@@ -66,7 +66,6 @@ class ShellContact {
   void hold(int v, const Eigen::Vector3d& push);
 
   ContactSamples s_;
-  unsigned sweeps_ = 0;        // apply() calls so far: odd ones sweep the samples backwards
   std::vector<double> share_;  // scratch: per stencil vertex, w m^-1 / sum w^2 m^-1
   // Per control vertex (sized on the first apply): the sum of its share of each push of the
   // last substep that moved it times the push's depth along the push's normal; valid where

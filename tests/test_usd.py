@@ -123,6 +123,9 @@ def test_a_moving_sheet_has_a_transform_per_time_code(tmp_path):
         assert tuple(world.Transform((1.0, 0.0, 0.0))) == (x, 0.0, 0.0)
     with pytest.raises(ValueError, match=r"transform has invalid shape: expected \(4, 4\) or \(3, 4, 4\)"):
         write_usd(str(tmp_path / "bad.usda"), tri, [1.0, 2.0, 3.0], pos, 24.0, transform=m[:2])
+    with pytest.raises(ValueError, match="transform has invalid shape"):  # checked before the old file goes
+        write_usd(path, tri, [1.0, 2.0, 3.0], pos, 24.0, transform=m[:2])
+    assert Usd.Stage.Open(path).GetPrimAtPath("/ThinBurn/Sheet")
 
 
 def test_bad_input_names_the_argument(tmp_path):

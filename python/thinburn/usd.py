@@ -95,6 +95,8 @@ def write_usd(path, faces, time_codes, positions, fps: float, *, char=None, igni
     if particles is not None and len(particles) != len(codes):
         raise ValueError(f"particles: one (positions, temperatures) pair per time code "
                          f"({len(codes)}), got {len(particles)}")
+    if transform is not None:  # checked before an existing file at path is replaced
+        transform = _transforms(transform, len(codes))
 
     path = os.fspath(path)
     folder = os.path.dirname(os.path.abspath(path))
@@ -117,7 +119,7 @@ def write_usd(path, faces, time_codes, positions, fps: float, *, char=None, igni
     mesh.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(counts))
     mesh.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(indices))
     if transform is not None:
-        _set_transform(mesh.AddTransformOp(), np.asarray(transform, dtype=np.float64), codes, Gf, Usd)
+        _set_transform(mesh.AddTransformOp(), transform, codes, Gf, Usd)
     points = mesh.CreatePointsAttr()
     extent = mesh.CreateExtentAttr()
     api = UsdGeom.PrimvarsAPI(mesh)
@@ -162,14 +164,22 @@ def write_usd(path, faces, time_codes, positions, fps: float, *, char=None, igni
     return path
 
 
+def _transforms(transform, frames: int) -> np.ndarray:
+    """transform as (4, 4) (also from 16 numbers) or (frames, 4, 4), else a ValueError."""
+    m = np.asarray(transform, dtype=np.float64)
+    if m.size == 16:
+        m = m.reshape(4, 4)
+    if m.shape not in ((4, 4), (frames, 4, 4)) or not np.all(np.isfinite(m)):
+        raise ValueError(f"transform has invalid shape: expected (4, 4) or ({frames}, 4, 4) "
+                         f"(finite) but got {m.shape}")
+    return m
+
+
 def _set_transform(op, m: np.ndarray, codes: np.ndarray, Gf, Usd) -> None:
     """One matrix, or one time sample per time code (USD takes row vectors: transposed)."""
     if m.shape == (4, 4):
         op.Set(Gf.Matrix4d(m.T.tolist()))
         return
-    if m.shape != (len(codes), 4, 4):
-        raise ValueError(f"transform has invalid shape: expected (4, 4) or ({len(codes)}, 4, 4) "
-                         f"but got {m.shape}")
     for mk, code in zip(m, codes):
         op.Set(Gf.Matrix4d(mk.T.tolist()), Usd.TimeCode(float(code)))
 
