@@ -12,6 +12,11 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 // A couple whose D changes by this much across its spacing curls across the front only.
 constexpr double kAnisotropicTurn = 0.25;
+// A shell whose normal turns by less than this across a couple's spacing is nearly flat there:
+// the curl's change of Gaussian curvature is taken out only in part (measure_shape), fading
+// as the turn drops below it. Below kCurvedTurn * 1e-7 (rounding's share of a flat sheet's
+// normals) nothing is taken out at all, so a flat sheet, however it lies, bends as it did.
+constexpr double kCurvedTurn = 0.01;
 
 double chord_ratio(double kappa, double sep) {
   // Chord over arc of a mid-surface bent to curvature kappa over arc length sep, as
@@ -40,7 +45,45 @@ void Bimetal::build() {
       sum += (couple_centre(r, topo.nbr_index[q]) - couple_centre(r, c)).norm();
     couple_spacing_(c) = k > 0 ? sum / k : 1.0;
   }
+  measure_shape();
   add_springs();
+}
+
+void Bimetal::measure_shape() {
+  // A change dII of the shell's second fundamental form changes its Gaussian curvature by
+  // tr(cof(S) dII) to first order, cof(S) = tr(S) P - S in the tangent plane (S the rest
+  // shape operator). A thin shell, far stiffer in stretching than in bending, takes no such
+  // change without stretching: the curl keeps only the part of itself that has none
+  // (docs/dynamics.md §2, "Curved shells"). A flat sheet's cof(S) is zero: nothing changes there.
+  const LatticeTopology& topo = s_.topology;
+  const int C = topo.couples;
+  const std::vector<Eigen::Matrix3d> S = shape_operators(s_.rest, topo);
+  cofactor_.assign(C, Eigen::Matrix3d::Zero());
+  cofactor_norm2_ = Eigen::VectorXd::Zero(C);
+  for (int c = 0; c < C; ++c) {
+    const Eigen::Vector3d n = (s_.rest.row(2 * c + 1) - s_.rest.row(2 * c)).normalized().transpose();
+    const Eigen::Matrix3d cof = S[c].trace() * (Eigen::Matrix3d::Identity() - n * n.transpose()) - S[c];
+    const double flat = kCurvedTurn / couple_spacing_(c);  // a curvature that counts as flat
+    const double norm2 = cof.squaredNorm();
+    if (!(norm2 > 1e-14 * flat * flat)) continue;
+    cofactor_[c] = cof;
+    cofactor_norm2_(c) = norm2 + flat * flat;
+  }
+}
+
+double Bimetal::factor(int c, const Eigen::Vector3d& u) const {
+  // How much of couple c's curl a spring along unit direction u takes: a share follows the
+  // direction g in which D grows, the rest is alike every way; on a curved shell less the part
+  // that would change the Gaussian curvature (measure_shape).
+  const Eigen::Vector3d g = grad_dir_.row(c).transpose();
+  const double share = grad_share_(c), along = u.dot(g);
+  double f = share * along * along + (1.0 - share) * 0.5;
+  if (cofactor_norm2_(c) > 0.0) {
+    const Eigen::Matrix3d& K = cofactor_[c];
+    const double lambda = (share * g.dot(K * g) + (1.0 - share) * 0.5 * K.trace()) / cofactor_norm2_(c);
+    f -= lambda * u.dot(K * u);
+  }
+  return f;
 }
 
 void Bimetal::add_springs() {
@@ -108,10 +151,6 @@ void Bimetal::update_gradients(const Eigen::VectorXd& D, const Eigen::VectorXd& 
 
 double Bimetal::curvature(const Eigen::VectorXd& D, int ca, int cb) const {
   // The curvature between two couples: their mean D over spacing, along the front.
-  auto factor = [&](int c, const Eigen::Vector3d& u) {
-    const double along = u.dot(grad_dir_.row(c).transpose());
-    return grad_share_(c) * along * along + (1.0 - grad_share_(c)) * 0.5;
-  };
   Eigen::Vector3d u = couple_centre(s_.rest, cb) - couple_centre(s_.rest, ca);
   u = u.norm() > 0 ? Eigen::Vector3d(u.normalized()) : u;
   const double f = s_.p.anisotropic_curl ? 0.5 * (factor(ca, u) + factor(cb, u)) : 1.0;

@@ -46,6 +46,8 @@ class Bimetal {
 
  private:
   double ratio(int s, double kappa) const;
+  void measure_shape();
+  double factor(int c, const Eigen::Vector3d& u) const;
   void update_gradients(const Eigen::VectorXd& D, const Eigen::VectorXd& delta, bool all);
   double curvature(const Eigen::VectorXd& D, int ca, int cb) const;
 
@@ -56,6 +58,11 @@ class Bimetal {
   Eigen::VectorXd couple_spacing_;    // per couple: mean rest distance to its axis neighbours
   RowMatX3 grad_dir_;                 // per couple: unit direction in which D grows (rest frame)
   Eigen::VectorXd grad_share_;        // per couple: how much of the curl follows it (0: isotropic)
+  // Per couple: the cofactor of the rest shell's shape operator in its tangent plane (zero on a
+  // flat sheet), and its squared norm plus that of a curvature that counts as flat: the curl's
+  // part along it would change the Gaussian curvature, which a shell cannot do unstretched.
+  std::vector<Eigen::Matrix3d> cofactor_;
+  Eigen::VectorXd cofactor_norm2_;
   std::vector<std::uint8_t> changed_; // per couple: its springs' rest lengths are recomputed this step
 };
 

@@ -1,5 +1,8 @@
 #include "lattice.hpp"
 
+#include <Eigen/Cholesky>
+#include <Eigen/Geometry>
+
 #include <algorithm>
 #include <atomic>
 #include <cmath>
@@ -393,6 +396,42 @@ Eigen::VectorXd FfdLattice::scatter(const Embedding& e, const Eigen::VectorXd& v
       out(2 * c) += e.weight[slot] * (1.0 - e.r(p)) * values(p);
       out(2 * c + 1) += e.weight[slot] * e.r(p) * values(p);
     }
+  return out;
+}
+
+std::vector<Eigen::Matrix3d> shape_operators(const RowMatX3& rest, const LatticeTopology& topo) {
+  auto axis = [&](int c) -> Eigen::Vector3d {
+    const Eigen::Vector3d a = (rest.row(2 * c + 1) - rest.row(2 * c)).transpose();
+    return a.norm() > 0 ? Eigen::Vector3d(a.normalized()) : Eigen::Vector3d::Zero();
+  };
+  std::vector<Eigen::Matrix3d> out(topo.couples, Eigen::Matrix3d::Zero());
+  for (int c = 0; c < topo.couples; ++c) {
+    const Eigen::Vector3d n = axis(c);
+    if (n.squaredNorm() == 0.0) continue;
+    const Eigen::Vector3d t1 = n.unitOrthogonal(), t2 = n.cross(t1);
+    // Unknowns (s11, s12, s22) in the basis (t1, t2); each neighbour gives two equations.
+    Eigen::Matrix3d N = Eigen::Matrix3d::Zero();
+    Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+    bool turns = false;
+    for (int q = topo.nbr_offset[c]; q < topo.nbr_offset[c + 1]; ++q) {
+      const int o = topo.nbr_index[q];
+      const Eigen::Vector3d e = couple_centre(rest, o) - couple_centre(rest, c), dn = axis(o) - n;
+      turns = turns || dn.dot(t1) != 0.0 || dn.dot(t2) != 0.0;
+      const double a1 = e.dot(t1), a2 = e.dot(t2);
+      const Eigen::Vector3d row1(a1, a2, 0.0), row2(0.0, a1, a2);
+      N += row1 * row1.transpose() + row2 * row2.transpose();
+      rhs += dn.dot(t1) * row1 + dn.dot(t2) * row2;
+    }
+    if (!turns) continue;  // exactly flat here: zero, not a least-squares rounding
+    const Eigen::LDLT<Eigen::Matrix3d> ldlt(N);
+    if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 1e-12 * N.trace())) continue;
+    const Eigen::Vector3d sv = ldlt.solve(rhs);
+    Eigen::Matrix<double, 3, 2> T;
+    T << t1, t2;
+    Eigen::Matrix2d S2;
+    S2 << sv(0), sv(1), sv(1), sv(2);
+    out[c] = T * S2 * T.transpose();
+  }
   return out;
 }
 

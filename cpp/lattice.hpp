@@ -113,6 +113,13 @@ inline Eigen::Vector3d couple_centre(const RowMatX3& x, int c) {
   return 0.5 * (x.row(2 * c) + x.row(2 * c + 1)).transpose();
 }
 
+/// @brief Per couple, the rest shell's shape operator S (3 x 3, acting in the couple's tangent
+/// plane, zero along its axis): how the couples' axes (bottom -> top, the shell's normals) turn
+/// towards its neighbours, dn = S de in the tangent plane, fitted by least squares over the
+/// neighbours with S symmetric. A sphere of radius R whose tops face out gives I/R in its
+/// tangent plane; a flat lattice, or a couple whose neighbours do not span two directions, zero.
+std::vector<Eigen::Matrix3d> shape_operators(const RowMatX3& rest, const LatticeTopology& topo);
+
 /// Work of one item of a loop over the lattice, in kParallelWork's units (threads.hpp): a
 /// vertex's or a spring's row of forces, Jacobian or CG product is about 32. So a loop over
 /// fewer than about 1000 vertices stays on one thread.

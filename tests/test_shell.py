@@ -108,20 +108,23 @@ def _burn_shell(V, F, src, seconds=40, **kw):
 @pytest.mark.parametrize("shape", ["lantern", "sphere"])
 def test_a_burning_shell_crumples_without_leaving_its_layer_or_stretching(shape):
     # 40 s of burning (a quarter to a third of the shell burnt). Every vertex stays between its
-    # couples' bottom and top (measured 0.503-0.541 across the layer on the lantern, 0.510-0.553
-    # on the sphere), and unburnt edges keep their length: p99 of |l/L - 1| at most 1.51 % on the
-    # lantern and 0.52 % on the sphere (13 % and 9.3 % before the curl rolled across the front).
+    # couples' bottom and top (measured 0.503-0.541 across the layer on the lantern, 0.510-0.557
+    # on the sphere), and unburnt edges keep their length: p99 of |l/L - 1| at most 0.63 % on the
+    # lantern and 0.15 % on the sphere, issue #12's 1 % for paper (13 % and 9.3 % before the curl
+    # rolled across the front; 1.63 % and 0.46 % before it kept the shell's Gaussian curvature,
+    # docs/dynamics.md §2 "Curved shells": the far side's faint curl barrelled the lantern and
+    # squeezed its rims).
     from thinburn import _surface_shapes as S
 
     if shape == "lantern":
         V, F = S.cylinder(0.1, 0.3, 96, 36)
         sim, strain, layer, _ = _burn_shell(V, F, [0.1, 0.0, 0.15], floor=0.0, lattice=12)
-        assert strain < 0.017
+        assert strain < 0.007
     else:
         V, F = S.icosphere(4, 0.1)
         sim, strain, layer, _ = _burn_shell(V, F, [0.1, 0.0, 0.0], pinned=np.flatnonzero(V[:, 2] > 0.098),
                                             lattice=12)
-        assert strain < 0.006
+        assert strain < 0.002
     assert sim.geometry == "surface"
     assert 0.45 < layer[0] and layer[1] < 0.6
     assert (sim.cell_states() == 2).mean() > 0.2

@@ -50,6 +50,18 @@ void define_control_surface(py::module_& m) {
       })
       .def_property_readonly("nbr_offset", [](const ControlSurface& c) { return c.topology().nbr_offset; })
       .def_property_readonly("nbr_index", [](const ControlSurface& c) { return c.topology().nbr_index; })
+      .def("shape_operators",
+           [](const ControlSurface& c) {
+             const std::vector<Eigen::Matrix3d> S = shape_operators(c.rest(), c.topology());
+             py::array_t<double> out({static_cast<py::ssize_t>(S.size()), py::ssize_t(3), py::ssize_t(3)});
+             auto o = out.mutable_unchecked<3>();
+             for (std::size_t k = 0; k < S.size(); ++k)
+               for (int i = 0; i < 3; ++i)
+                 for (int j = 0; j < 3; ++j) o(k, i, j) = S[k](i, j);
+             return out;
+           },
+           "Per couple, the rest shape operator (3 x 3, in its tangent plane) fitted to how the "
+           "couples' axes turn towards their neighbours: I/R on a sphere of radius R.")
       .def("edge_curvature", &ControlSurface::edge_curvature, py::arg("quantile"))
       .def("embed",
            [](const ControlSurface& c, const RowMatX3& points) {

@@ -57,6 +57,13 @@ class ControlSurface:
         off = self._c.nbr_offset
         return np.asarray(self._c.nbr_index[off[couple]:off[couple + 1]])
 
+    def shape_operators(self) -> np.ndarray:
+        """(couples, 3, 3) the rest shell's shape operator at each couple, in its tangent plane,
+        fitted to how the couples' axes turn towards their neighbours (I/R on a sphere of radius
+        R, tops outward; zero on a flat sheet). The bimetal curl keeps the part of itself that
+        leaves the Gaussian curvature alone (docs/dynamics.md §2, "Curved shells")."""
+        return self._c.shape_operators()
+
     def edge_curvature(self, quantile: float = 0.9) -> float:
         """The quantile over couples of their most curved edge's (angle between normals) / length, 1/m."""
         return self._c.edge_curvature(real(quantile, "quantile", low=0.0, high=1.0))
