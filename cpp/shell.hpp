@@ -75,6 +75,10 @@ class Shell {
   int size() const { return M_; }
   int couples() const { return lattice_->couples(); }
   double thickness() const { return thickness_; }
+  /// @brief How well the lattice carries the mesh: the 99th percentile over mesh vertices of
+  /// their distance from the control surface's interpolated mid-surface over half the layer's
+  /// thickness (<= 1: in the layer). 0 on a grid lattice, whose mesh lies on it.
+  double layer_fit() const { return layer_fit_; }
   /// @brief The control surface (null on a grid lattice).
   const ControlSurface* control_surface() const { return control_.get(); }
 
@@ -160,6 +164,7 @@ class Shell {
   ShellParams params_;
   int M_ = 0;
   LatticeInterp mesh_interp_ = LatticeInterp::Trilinear;  // in-plane FFD of a grid lattice's mesh and cells
+  double layer_fit_ = 0.0;
   double thickness_ = 0.0;
   std::unique_ptr<FfdLattice> lattice_;
   std::unique_ptr<LatticeDynamics> dynamics_;

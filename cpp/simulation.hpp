@@ -198,6 +198,9 @@ class Simulation {
   bool has_shell() const { return shell_ != nullptr; }
   int lattice_size() const { return shell_ ? shell_->size() : 0; }
   double lattice_thickness() const { return shell_ ? shell_->thickness() : 0.0; }
+  /// @brief Shell::layer_fit: how far (p99, in half-thicknesses) the mesh lies from its layer's
+  /// mid-surface; 0 on a grid lattice or without a shell.
+  double lattice_fit() const { return shell_ ? shell_->layer_fit() : 0.0; }
   /// @brief The lattice's own flexural rigidity and the share of it its layers keep
   /// (LatticeDynamics::lattice_rigidity, bending_share); 0 and 1 without a shell.
   double lattice_rigidity() const { return shell_ ? shell_->dynamics().lattice_rigidity() : 0.0; }

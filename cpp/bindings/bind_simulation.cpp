@@ -194,6 +194,7 @@ void define_simulation(py::module_& m) {
       .def_property_readonly("lattice_size", &S::lattice_size)
       .def_property_readonly("lattice_couples", &S::lattice_couples)
       .def_property_readonly("lattice_thickness", &S::lattice_thickness)
+      .def_property_readonly("lattice_fit", &S::lattice_fit)
       .def_property_readonly("lattice_rigidity", &S::lattice_rigidity)
       .def_property_readonly("bending_share", &S::bending_share)
       .def("lattice_positions", &S::lattice_positions)

@@ -451,6 +451,16 @@ class Simulation:
         return self._sim.lattice_thickness
 
     @property
+    def lattice_fit(self) -> float:
+        """How well a curved shell's lattice carries its mesh: the 99th percentile over mesh
+        vertices of their distance from the lattice's interpolated mid-surface, in half
+        thicknesses (at most 1: the mesh lies in the layer between the couples). Detail finer
+        than the lattice (pleats, waves) rides at that offset, and bending stretches it by the
+        bend's curvature times the offset; the chosen lattice is made finer until this is at
+        most 0.5 (docs/lattice.md, "Detail finer than the lattice"). 0 on a flat sheet's grid."""
+        return self._sim.lattice_fit
+
+    @property
     def lattice_rigidity(self) -> float:
         """The lattice's own flexural rigidity, N m: its layers' springs a thickness apart
         (docs/dynamics.md §1.1); 0 without a shell."""
