@@ -162,7 +162,59 @@ bool Contacts::collider_contact(const Eigen::Vector3d& x, ColliderHit& hit) cons
   return hit.distance < collider_margin_ + kSlack;
 }
 
-void Contacts::begin_substep() {
+FloorSupport::FloorSupport(std::vector<int> start, std::vector<int> points, Eigen::VectorXd reach, Height height,
+                           double half_thickness)
+    : start_(std::move(start)), points_(std::move(points)), reach_(std::move(reach)), height_(std::move(height)),
+      half_(half_thickness) {
+  int n = 0;
+  for (int p : points_) n = std::max(n, p + 1);
+  z_.assign(n, 0.0);
+  seen_.assign(n, 0);
+}
+
+double FloorSupport::point_height(const RowMatX3& x, int point) {
+  // A point is carried by a few couples: take its height once per call.
+  if (seen_[point] != call_) z_[point] = height_(x, point), seen_[point] = call_;
+  return z_[point];
+}
+
+void FloorSupport::offsets(const RowMatX3& x, double floor_z, Eigen::VectorXd& out) {
+  ++call_;
+  const int C = static_cast<int>(reach_.size());
+  // An offset moves only when the pose moved it by more than a hair: recomputed to rounding
+  // each substep, a resting lantern's rim flickered in and out of contact (273 CG iterations a
+  // frame against 1).
+  const double hair = 1e-3 * half_;
+  const bool fresh = out.size() != 2 * C;
+  if (fresh) out.resize(2 * C);
+  for (int c = 0; c < C; ++c) {
+    const double mid = 0.5 * (x(2 * c, 2) + x(2 * c + 1, 2));
+    // Out of reach of the floor (with thicknesses to spare): any offset that keeps it free.
+    double low = mid - reach_[c];
+    if (low <= floor_z + 4.0 * half_ && start_[c + 1] > start_[c]) {
+      low = std::numeric_limits<double>::infinity();
+      for (int k = start_[c]; k < start_[c + 1]; ++k) low = std::min(low, point_height(x, points_[k]));
+    }
+    for (int v = 2 * c; v < 2 * c + 2; ++v) {
+      const double offset = x(v, 2) - low + half_;
+      if (fresh || std::abs(offset - out[v]) > hair) out[v] = offset;
+    }
+  }
+}
+
+void Contacts::set_floor_support(std::unique_ptr<FloorSupport> support) {
+  support_ = std::move(support);
+  if (support_) support_->offsets(s_.lattice.positions(), s_.p.floor_z, floor_offset_);
+}
+
+void Contacts::begin_substep(double h) {
+  if (support_) {
+    // Where the substep heads (a sphere rolling a fifth of a turn a frame touches the floor with
+    // the points it ends the substep on): the active vertices a substep of their velocity on.
+    x_ahead_ = s_.lattice.positions();
+    for (int v : s_.active) x_ahead_.row(v) += h * (s_.vel.row(v) + s_.drift.row(v));
+    support_->offsets(x_ahead_, s_.p.floor_z, floor_offset_);
+  }
   if (!colliders_) return;
   const RowMatX3& x = s_.lattice.positions();
   if (x_begin_.rows() != x.rows()) x_begin_ = x;

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <utility>
 #include <vector>
@@ -60,6 +61,36 @@ inline Eigen::Vector3d positional_friction(const Eigen::Vector3d& p, const Eigen
   return p - (len <= hold ? 1.0 : hold / len) * slide;
 }
 
+/// @brief A curved shell's floor (docs/lattice.md, "Floor"): per couple,
+/// the mesh points it carries a fair share of. Which of them is lowest depends on how the shell
+/// lies now, so offsets() places each control vertex above the floor by its height over the
+/// lowest of its couple's points where they are now (couples within reach of the floor only),
+/// plus the half thickness by which the dynamics' floor lies below the sheet's (a flat sheet's
+/// bottom layer rests there).
+class FloorSupport {
+ public:
+  /// @brief Height (m) of mesh point `point` for control positions x.
+  using Height = std::function<double(const RowMatX3& x, int point)>;
+  /// @brief points[start[c] .. start[c + 1]): the mesh points couple c carries (may be none:
+  /// then its mid-point); reach[c]: the farthest of them from its mid-point at rest, m.
+  FloorSupport(std::vector<int> start, std::vector<int> points, Eigen::VectorXd reach, Height height,
+               double half_thickness);
+  /// @brief Per control vertex of positions x (2 couples rows), its height above the floor
+  /// floor_z (the dynamics') at which it touches it.
+  void offsets(const RowMatX3& x, double floor_z, Eigen::VectorXd& out);
+
+ private:
+  double point_height(const RowMatX3& x, int point);
+
+  std::vector<int> start_, points_;
+  Eigen::VectorXd reach_;
+  Height height_;
+  double half_;
+  std::vector<double> z_;            // scratch: heights taken in this call
+  std::vector<std::uint32_t> seen_;  // the call that took z_[point]
+  std::uint32_t call_ = 0;
+};
+
 class Contacts {
  public:
   /// @brief State of the lattice these contacts act on, kept by reference (the dynamics owns it).
@@ -77,8 +108,9 @@ class Contacts {
   };
   Contacts(int n, const View& view);
 
-  /// @brief Per vertex, its height above floor_z at which it touches the floor (empty: 0).
-  void set_floor_offsets(const Eigen::VectorXd& offsets) { floor_offset_ = offsets; }
+  /// @brief A curved shell's floor: the offsets follow the shell's pose, taken afresh at every
+  /// substep's start for the positions its velocities will reach by the substep's end.
+  void set_floor_support(std::unique_ptr<FloorSupport> support);
   /// @brief The floor's height under vertex v, m.
   double floor_at(int v) const;
   /// @brief Collision objects (null: none), their margin (m, >= 0) and the shell's points that
@@ -126,9 +158,9 @@ class Contacts {
   /// @brief After each substep: project the active vertices below the floor onto it, with
   /// Coulomb friction on what the floor removed.
   void apply_floor(double h);
-  /// @brief A substep starts: keep the active vertices' positions for the colliders'
-  /// positional friction (nothing without colliders).
-  void begin_substep();
+  /// @brief A substep h starts: a curved shell's floor offsets for where it is heading, and the
+  /// active vertices' positions for the colliders' positional friction.
+  void begin_substep(double h);
   /// @brief After each substep: push the active vertices inside a collider's margin out, then
   /// the shell's samples; returns the samples pushed.
   int apply_colliders(double h);
@@ -147,6 +179,8 @@ class Contacts {
 
   View s_;
   Eigen::VectorXd floor_offset_;  // per vertex, empty: none
+  std::unique_ptr<FloorSupport> support_;  // a curved shell's floor (null: fixed offsets)
+  RowMatX3 x_ahead_;                       // scratch: where the substep heads
   std::shared_ptr<const Colliders> colliders_;  // null: none
   double collider_margin_ = 0.0;
   std::uint64_t collider_version_ = 0;  // colliders_->version() when the sheet last woke for it

@@ -365,10 +365,8 @@ void LatticeDynamics::set_pinned(const std::vector<std::uint8_t>& pinned) {
   sleep_.wake_all();
 }
 
-void LatticeDynamics::set_floor_offsets(const Eigen::VectorXd& offsets) {
-  require(offsets.size() == 0 || offsets.size() == n_, "floor offsets: one per control vertex expected");
-  require(offsets.allFinite(), "floor offsets must be finite");
-  contacts_.set_floor_offsets(offsets);
+void LatticeDynamics::set_floor_support(std::unique_ptr<FloorSupport> support) {
+  contacts_.set_floor_support(std::move(support));
   sleep_.wake_all();
 }
 
@@ -589,7 +587,7 @@ int LatticeDynamics::integrate(double dt, int substeps, StepStats& st) {
   for (;;) {
     const double h = substeps > 0 ? dt / substeps : 0.0;
     for (int k = 0; k < substeps; ++k) {
-      contacts_.begin_substep();
+      contacts_.begin_substep(h);
       if (implicit)
         st.cg_iterations += implicit_substep(h);
       else

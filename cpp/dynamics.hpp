@@ -165,10 +165,10 @@ class LatticeDynamics {
   const Eigen::VectorXd& strength() const { return strength_; }
   /// @brief Per control vertex; pinned ones never move.
   void set_pinned(const std::vector<std::uint8_t>& pinned);
-  /// @brief Per control vertex, its height above floor_z at which it touches the floor (empty:
-  /// 0 for all). A shell's couples need not reach its lowest points: a lantern's lowest couples
-  /// sit above its rim, so they rest that much above the floor.
-  void set_floor_offsets(const Eigen::VectorXd& offsets);
+  /// @brief A curved shell's floor (null: every control vertex touches it at floor_z). A
+  /// shell's couples need not reach its lowest points: a lantern's lowest couples sit above its
+  /// rim, and which points are lowest changes as a sphere rolls (FloorSupport, contact.hpp).
+  void set_floor_support(std::unique_ptr<FloorSupport> support);
   /// @brief Collision objects (docs/dynamics.md §3.2), kept by pointer (null: none): after every
   /// substep a free control vertex closer than margin (m, >= 0) to one is pushed out to margin
   /// along its normal, loses its inward normal speed relative to the collider and, by the

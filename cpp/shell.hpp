@@ -70,6 +70,9 @@ class Shell {
   Shell(const SurfaceCells& cells, const RowMatX3& vertices, const RowMatX3i& faces,
         const ShellParams& params, const std::vector<double>& cell_mass,
         const std::vector<std::uint8_t>& pinned);
+  // The floor support reads this shell's control surface through a pointer to it.
+  Shell(const Shell&) = delete;
+  Shell& operator=(const Shell&) = delete;
 
   /// @brief M couples per side on a grid lattice, 0 on a control surface.
   int size() const { return M_; }
