@@ -256,6 +256,7 @@ class BakeJob:
         # frames are sampled once it has: _await_shape).
         self.spacing = 0.5 * inputs.cell_spacing(world, tris, settings.cells)
         self.lattice = int(settings.lattice)
+        self.crumple_gain = float(settings.crumple_gain)  # the frame the bake starts from's
         self.max_strain = self.max_strain_frame = None  # set when a moving bake finishes
         self.shape = None  # what the core made of the sheet (worker.simulation_shape)
         edges = inputs.group_edges(objs) if self.grouped else inputs.mesh_edges(obj)
@@ -622,7 +623,9 @@ class BakeJob:
             self.max_strain, self.max_strain_frame = worst, at
             for obj in objs:
                 obj.thinburn.baked_strain = worst
-            text = stretch.stretch_warning(self.obj_name, worst, at, self.lattice)
+            text = stretch.stretch_warning(self.obj_name, worst, at, self.lattice,
+                                           crumple=self.crumple_gain, fit=(self.shape or {}).get("fit"),
+                                           couples=(self.shape or {}).get("couples"))
             if text:
                 self.warnings.append(text)
         if self.tilt > TILT_WARNING_DEG:

@@ -48,12 +48,26 @@ class StretchMeter:
         return float(worst[k]), float(self.worst_frame[k])
 
 
-def stretch_warning(name: str, strain: float, frame, lattice: int) -> str | None:
-    """The report's words for a bake that stretched an edge by more than WARN_STRAIN."""
+def stretch_warning(name: str, strain: float, frame, lattice: int, crumple=None, fit=None,
+                    couples=None) -> str | None:
+    """The report's words for a bake that stretched an edge by more than WARN_STRAIN. crumple:
+    the Crumple Amount baked (None: unknown); fit: the core's lattice fit (how far, in half
+    layer thicknesses, the mesh lies off its curved shell's lattice; None or 0 on a flat one);
+    couples: how many the lattice had (for a Motion Detail to suggest)."""
     if frame is None or strain <= WARN_STRAIN:
         return None
     motion = "0: the core's choice" if lattice == 0 else f"{lattice}"
-    return (f"'{name}' stretched: an edge reached {1.0 + strain:.1f}× its rest length at frame "
-            f"{frame:.0f} (paper hardly stretches), so the motion misbehaved there. Lower Crumple "
-            f"Amount (ThinBurn > Motion; e.g. 0.3), or set Motion Detail (now {motion}) to another "
-            "value such as 9, or switch Crumple off to burn the sheet in its rest shape")
+    text = (f"'{name}' stretched: an edge reached {1.0 + strain:.1f}× its rest length at frame "
+            f"{frame:.0f} (a sheet hardly stretches), so the motion misbehaved there. ")
+    if fit is not None and fit > 1.0:
+        # Motion Detail counts couples along the square root of the area: twice as many per
+        # side as the core chose (or as set) halves their spacing.
+        per_side = lattice if lattice > 0 else (couples or 0) ** 0.5
+        finer = f", e.g. {max(9, int(round(2 * per_side)))}" if per_side > 0 else ""
+        text += (f"Its mesh has detail finer than the motion lattice (pleats, waves, folds up to "
+                 f"{fit:.1f} half layer-thicknesses off it): set Motion Detail (now {motion}) higher{finer}")
+    else:
+        text += f"Set Motion Detail (now {motion}) to another value such as 9"
+    if crumple is None or crumple > 0.3:
+        text += ", lower Crumple Amount (ThinBurn > Motion; e.g. 0.3)"
+    return text + ", or switch Crumple off to burn the sheet in its rest shape"

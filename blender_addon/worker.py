@@ -64,17 +64,19 @@ def path_ignitions(start, end, t0: float, dt: float, spacing: float) -> list:
 def simulation_shape(sim) -> dict:
     """What the core made of the sheet: ``geometry`` ("plane": the paper's N×N grid over a flat
     sheet; "surface": cells on a curved shell's surface), ``cells`` (how many), ``spacing`` (m
-    between neighbouring cells) and ``couples`` (the lattice's; 0 without motion). A core
-    without shells (no ``geometry``) is "plane"."""
+    between neighbouring cells), ``couples`` (the lattice's; 0 without motion) and ``fit`` (how
+    far the mesh lies off a curved shell's lattice, Simulation.lattice_fit). A core without
+    shells (no ``geometry``) is "plane"."""
     geometry = getattr(sim, "geometry", "plane")
     n = int(sim.cells)
     cells = int(getattr(sim, "num_cells", n * n))
     spacing = float(getattr(sim, "cell_spacing", 0.0))
     try:
         couples = int(getattr(sim, "lattice_couples", 0))
+        fit = float(getattr(sim, "lattice_fit", 0.0))
     except (ValueError, RuntimeError):  # shell=False: no lattice
-        couples = 0
-    return dict(geometry=geometry, cells=cells, spacing=spacing, couples=couples)
+        couples, fit = 0, 0.0
+    return dict(geometry=geometry, cells=cells, spacing=spacing, couples=couples, fit=fit)
 
 
 class CoreWorker(threading.Thread):

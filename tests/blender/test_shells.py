@@ -234,7 +234,13 @@ def test_stretch_meter_and_its_warning(addon):
     assert meter.largest(burnt) == pytest.approx((0.2, 5.0))
     text = addon.stretch.stretch_warning("Letter", 2.0, 9.0, 0)
     assert "3.0× its rest length at frame 9" in text and "Motion Detail" in text
+    assert "lower Crumple Amount" in text
     assert addon.stretch.stretch_warning("Letter", 0.2, 5.0, 0) is None
+    # A curved shell whose mesh lies off its lattice (lattice fit > 1) is told so; a Crumple
+    # Amount already at 0.3 is not told to go to 0.3.
+    text = addon.stretch.stretch_warning("Curtain", 0.8, 24.0, 0, crumple=0.3, fit=1.47, couples=100)
+    assert "finer than the motion lattice" in text and "1.5 half layer-thicknesses" in text
+    assert "higher, e.g. 20" in text and "Crumple Amount" not in text
 
 
 def test_a_bake_that_stretches_is_warned_about(addon, tmp_path, monkeypatch):
