@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from bench_blender import ADDON_NAME, enable_addon  # scripts/ is on the path when a script runs
+from blender_session import ADDON_NAME, enable_addon  # scripts/ is on the path when a script runs
 
 
 def sheet(n: int, frames: int):

@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from bench_blender import ROOT, enable_addon  # scripts/ is on the path when a script runs
+from blender_session import ROOT, enable_addon  # scripts/ is on the path when a script runs
 
 sys.path.insert(0, str(ROOT / "tests" / "blender"))
 import blender_helpers as H  # noqa: E402  (the scene builders the tests use)

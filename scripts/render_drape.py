@@ -31,7 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-from bench_blender import ADDON_NAME, ROOT, enable_addon  # scripts/ is on the path when a script runs
+from blender_session import ADDON_NAME, ROOT, enable_addon  # scripts/ is on the path when a script runs
 from render_shells import camera_and_world, render_frames
 from walkthrough import _material
 
