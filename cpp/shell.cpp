@@ -214,18 +214,25 @@ void Shell::set_floor_offsets() {
   // does: a lantern's lowest couples sit above its rim. Which point is lowest depends on how
   // the shell lies, so the dynamics take the points' heights as they are (FloorSupport): on the
   // rest pose's heights a paper sphere rolling in a 3 m/s wind floated 12-39 mm above its table.
-  // Of a couple's points, kFloorPoints spread over its window stand for them all: the lowest
-  // of all 470 or so was 18 ms a frame on a 16k-vertex lantern (2 ms without).
-  constexpr double kCarried = 0.1;
+  // A couple's points are those it moves most (its MLS weight at least kCarried, or the
+  // largest of the point's): lifting the couple lifts them. On the points it merely shared
+  // (window share over 0.1, MLS weight small or negative) the floor kept lifting couples that
+  // hardly moved the point, and a paper sphere at rest under the symplectic integrator hopped
+  // 30 mm. Of a couple's points, kFloorPoints spread over its window stand for them all: the
+  // lowest of all 470 or so was 18 ms a frame on a 16k-vertex lantern (2 ms without).
+  constexpr double kCarried = 0.3;
   constexpr int kFloorPoints = 16;
   constexpr int S = SurfaceEmbedding::kStencil;
   const int C = lattice_->couples();
   const RowMatX3& rest = lattice_->rest();
   std::vector<std::vector<int>> by_couple(C);
-  for (Eigen::Index i = 0; i < surface_vertices_.size(); ++i)
+  for (Eigen::Index i = 0; i < surface_vertices_.size(); ++i) {
+    const double* w = surface_vertices_.weight.data() + std::size_t(i) * S;
+    const int owner = static_cast<int>(std::max_element(w, w + S) - w);
     for (int q = 0; q < S; ++q)
-      if (surface_vertices_.share[std::size_t(i) * S + q] > kCarried)
+      if (q == owner || w[q] >= kCarried)
         by_couple[surface_vertices_.couple[std::size_t(i) * S + q]].push_back(static_cast<int>(i));
+  }
   std::vector<int> start(1, 0), points;
   Eigen::VectorXd reach = Eigen::VectorXd::Zero(C);
   for (int c = 0; c < C; ++c) {
