@@ -150,6 +150,9 @@ class Contacts {
   /// @brief After an implicit solve (dv: 3 per active vertex, the velocity change): make the
   /// vertices it takes below the floor contacts, with dv's v_z prescribed; true if any.
   bool add_landings(double h, double* dv);
+  /// @brief After a solve: contacts whose floor impulse (impulse(slot), kg m/s) pulls them down
+  /// are let go; returns whether any was (then the system is solved again).
+  bool release_pulled(double h, const std::function<Eigen::Vector3d(int slot)>& impulse);
   /// @brief After an implicit substep's move: a contact sits exactly on the floor.
   void settle(int v, double h);
   /// @brief Explicit substep, before the move: a vertex resting on the floor that the substep

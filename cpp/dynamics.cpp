@@ -733,8 +733,9 @@ void LatticeDynamics::implicit_rhs(double h) {
           so >= 0 ? Eigen::Vector3d(vec3(B.w, so)) : Eigen::Vector3d(vel_.row(o).transpose() + drift_.row(o).transpose());
       Kw -= load_sym(B.jac + 6 * inc_.spring[q]) * (wv - wo);
     }
+    // Unfiltered: the solve filters its residual, and a contact's row of b is what
+    // constraint_impulse weighs the floor's impulse against.
     vec3(B.b, a) = h * (vec3(B.f, a) + h * Kw);
-    contacts_.filter(v, B.b + 3 * a);
   });
 }
 
@@ -785,9 +786,14 @@ int LatticeDynamics::implicit_substep(double h_step) {
     vec3(B.dv, a) = d0;
   }
   int iterations = solver_.solve(h);
-  // Vertices the solution takes below the floor become contacts, and the system is solved
-  // again from the last solution (each round adds at least one; rarely more than one round).
-  for (int round = 1; round < kMaxContactRounds && contacts_.add_landings(h, B.dv); ++round) {
+  // Contacts the floor would have to pull let go (before the landings, which change dv);
+  // vertices the solution takes below the floor become contacts; then the system is solved
+  // again from the last solution (each round changes at least one contact).
+  const auto impulse = [&](int a) { return solver_.constraint_impulse(h, a); };
+  for (int round = 1; round < kMaxContactRounds; ++round) {
+    const bool released = contacts_.release_pulled(h, impulse);
+    const bool landed = contacts_.add_landings(h, B.dv);
+    if (!landed && !released) break;
     implicit_rhs(h);
     iterations += solver_.solve(h);
   }

@@ -133,6 +133,17 @@ void ImplicitSolver::apply_A(double h, const double* in, double* out) {
   });
 }
 
+Eigen::Vector3d ImplicitSolver::constraint_impulse(double h, int a) {
+  Buffers B = buffers();
+  const int v = s_.active[a];
+  Eigen::Vector3d y = mat3(B.diag, a) * vec3(B.dv, a);
+  for (int q = s_.incidence.start[v]; q < s_.incidence.start[v + 1]; ++q) {
+    const int so = s_.slot[s_.incidence.other[q]];
+    if (so >= 0) y -= h * h * load_sym(B.jac + 6 * s_.incidence.spring[q]) * vec3(B.dv, so);
+  }
+  return y - vec3(B.b, a);
+}
+
 void ImplicitSolver::precondition(const double* in, double* out) {
   Buffers B = buffers();
   const int na = static_cast<int>(s_.active.size());
@@ -292,14 +303,16 @@ int ImplicitSolver::solve(double h) {
   // at their prescribed value (v_z -> 0) and every search direction is filtered to leave them
   // there.
   apply_A(h, B.dv, B.Ap);
-  for (int i = 0; i < N; ++i) B.r[i] = B.b[i] - B.Ap[i];
+  // b stays as assembled (constraint_impulse reads it); its filtered copy in z (free until the
+  // first preconditioning) sets the scale of the tolerance.
+  for (int i = 0; i < N; ++i) B.r[i] = B.b[i] - B.Ap[i], B.z[i] = B.b[i];
   for (int a = 0; a < na; ++a) {
     s_.contacts.filter(s_.active[a], B.r + 3 * a);
-    s_.contacts.filter(s_.active[a], B.b + 3 * a);
+    s_.contacts.filter(s_.active[a], B.z + 3 * a);
   }
   int iterations = 0;
   const double rnorm0 = std::sqrt(det_dot(B.r, B.r, N, B.partial));
-  const double ref = std::max(rnorm0, std::sqrt(det_dot(B.b, B.b, N, B.partial)));
+  const double ref = std::max(rnorm0, std::sqrt(det_dot(B.z, B.z, N, B.partial)));
   // Absolute floor: a residual below cg_velocity_tolerance times the mass norm changes the
   // velocities by less than about that (A >= M), whatever rounding-level right-hand side a
   // resting sheet has; without it such a sheet would iterate on rounding noise.

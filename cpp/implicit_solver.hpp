@@ -73,6 +73,9 @@ class ImplicitSolver {
   /// @brief Solve A dv = b from the start value in buffers().dv (filtered components at their
   /// prescribed values) for substep h; returns the iterations taken.
   int solve(double h);
+  /// @brief (A dv - b) at active slot a, from the buffers' dv and b: on a contact's filtered
+  /// components, the impulse the floor gave it this substep (kg m/s); about 0 on free ones.
+  Eigen::Vector3d constraint_impulse(double h, int a);
   /// @brief Block LDL^T factorizations since reset_count.
   int factorizations() const { return factorizations_; }
   void reset_count() { factorizations_ = 0; }
