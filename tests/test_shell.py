@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import thinburn
-
+from thinburn._mesh_measures import EdgeStrain
 from thinburn.demo import build, default_scene
 
 
@@ -66,10 +66,6 @@ def test_free_sheet_centre_of_mass_stays_put():
 
 # --- shells (issue #11) and the default curl (issue #12) -------------------------------------
 
-def _edges(F):
-    return np.unique(np.sort(np.vstack([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), 1), axis=0)
-
-
 def _layer_position(sim, V, F, M):
     """Per vertex, where it sits across the layer of its couples now: 0 bottom, 1 top."""
     from thinburn.control_surface import ControlSurface
@@ -87,14 +83,14 @@ def _layer_position(sim, V, F, M):
 def _burn_shell(V, F, src, seconds=40, **kw):
     sim = thinburn.Simulation(V, F, cells=48, **kw)
     sim.ignite(src)
-    E = _edges(F)
-    l0 = np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1)
+    measure = EdgeStrain(V, F)
+    E = measure.edges
     strain, layer, rise = 0.0, [1.0, 0.0], 0.0
     for k in range(24 * seconds):
         sim.step(1 / 24)
         if k % 24 == 23:  # once a second
             P = sim.vertex_positions()
-            r = np.abs(np.linalg.norm(P[E[:, 0]] - P[E[:, 1]], axis=1) / l0 - 1)
+            r = measure(P)
             ch = sim.vertex_char()
             unburnt = (ch[E[:, 0]] == 0) & (ch[E[:, 1]] == 0)
             strain = max(strain, np.percentile(r[unburnt], 99))
@@ -158,13 +154,11 @@ def test_a_stack_of_sheets_closer_than_its_couples_keeps_each_sheet_in_its_own_l
     mat = thinburn.MATERIALS["paper"].with_(V0=40.0)
     sim = thinburn.Simulation(V, F, material=mat, cells=64, lattice=9, floor=0.0005, crumple_gain=0.3)
     sim.ignite((0.0, 0.0, 0.0045), radius=0.01)
-    E = _edges(F)
-    l0 = np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1)
+    measure = EdgeStrain(V, F)
     worst = 0.0
     for _ in range(72):
         sim.step(1 / 24)
-        P = sim.vertex_positions()
-        worst = max(worst, np.abs(np.linalg.norm(P[E[:, 0]] - P[E[:, 1]], axis=1) / l0 - 1).max())
+        worst = max(worst, measure(sim.vertex_positions()).max())
     assert sim.geometry == "surface"
     assert worst < 0.006
 
@@ -200,13 +194,11 @@ def _pleated_curtain(lattice=None):
     v[:, 1] = 0.01 * np.sin(2 * np.pi * v[:, 0] / 0.1)
     top = np.flatnonzero(np.isclose(v[:, 2], v[:, 2].max()))
     sim = thinburn.Simulation(v, f, material="curtain", cells=64, pinned=top, lattice=lattice)
-    E = _edges(f)
-    l0 = np.linalg.norm(v[E[:, 0]] - v[E[:, 1]], axis=1)
+    measure = EdgeStrain(v, f)
     worst = 0.0
     for _ in range(48):
         sim.step(1 / 24)
-        P = sim.vertex_positions()
-        worst = max(worst, np.percentile(np.abs(np.linalg.norm(P[E[:, 0]] - P[E[:, 1]], axis=1) / l0 - 1), 99))
+        worst = max(worst, np.percentile(measure(sim.vertex_positions()), 99))
     return sim, worst
 
 

@@ -1,8 +1,28 @@
-"""Measures of a deformed mesh used by tests and scripts: adjacent faces, the angle between them
-(facets), and the faces far from the fire."""
+"""Measures of a deformed mesh used by tests and scripts: its edges and their strain, adjacent
+faces, the angle between them (facets), and the faces far from the fire."""
 from __future__ import annotations
 
 import numpy as np
+
+
+def mesh_edges(faces):
+    """Each edge of the triangles once, (n, 2) vertex indices, the smaller first."""
+    f = np.asarray(faces)
+    return np.unique(np.sort(np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]), 1), axis=0)
+
+
+class EdgeStrain:
+    """|l / L - 1| per edge of a mesh, against its lengths L at rest."""
+
+    def __init__(self, rest, faces):
+        self.edges = mesh_edges(faces)
+        self.rest_length = self.lengths(rest)
+
+    def lengths(self, x):
+        return np.linalg.norm(x[self.edges[:, 0]] - x[self.edges[:, 1]], axis=1)
+
+    def __call__(self, x):
+        return np.abs(self.lengths(x) / self.rest_length - 1.0)
 
 
 def face_adjacency(faces):
