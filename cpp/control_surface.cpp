@@ -41,6 +41,10 @@ ControlSurface::ControlSurface(const SurfVerts& vertices, const SurfFaces& faces
   if (!(thickness > 0) || !std::isfinite(thickness)) throw std::invalid_argument("lattice_thickness must be > 0");
   CellOptions opt;
   opt.spacing = spacing;
+  // Couples on the rim: a mesh point beyond the outermost couples was extrapolated from them,
+  // and the lever turned their twist into stretch (a pleated curtain's side edge in wind:
+  // single edges 2.3x; docs/lattice.md, "Rim couples").
+  opt.rim_seeds = true;
   coarse_ = std::make_shared<const SurfaceCells>(vertices, faces, opt);
   const int C = coarse_->size();
   if (C < 3)

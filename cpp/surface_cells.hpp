@@ -33,6 +33,9 @@ struct CellOptions {
   int lloyd_iters = 3;
   /// The dense mesh's edges are at most spacing / refine.
   double refine = 3.0;
+  /// Seed the mesh's boundary first, about a spacing apart along it, and keep those cells'
+  /// positions on it while relaxing (a lattice's rim couples; the fire's cells do not).
+  bool rim_seeds = false;
 };
 
 /// @brief Nearest-point queries on a fixed 3-D point set: a k-d tree, O(log n) per query.

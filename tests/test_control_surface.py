@@ -48,7 +48,7 @@ def test_weights_are_a_partition_of_unity_and_rest_is_exact(shell):
     assert (e.share >= 0).all()
     np.testing.assert_array_equal(cs.deform(e, cs.rest), V)
     # Every point sits in the layer between its couples: its offset from the interpolated
-    # mid-surface is well under half the thickness (measured 1.06 mm on the lantern, 0.50 mm on
+    # mid-surface is well under half the thickness (measured 0.72 mm on the lantern, 0.50 mm on
     # the sphere, 0 on the flat sheet, against half-thicknesses of 4.4, 3.75 and 3.1 mm).
     assert np.abs(e.offset).max() < 0.15 * cs.thickness
 
@@ -97,10 +97,12 @@ def _dihedral(P, F):
 
 def test_a_bent_lattice_bends_a_fine_mesh_smoothly():
     # The lattice of a flat 20 cm sheet rolled round a cylinder of radius 5 cm (30 degrees between
-    # neighbouring couples): the exact roll turns each 2.5 mm mesh edge by 2.86 degrees. Away from
-    # the rim the embedding's neighbouring faces meet at most at 6.7 degrees (measured 6.67) and no
-    # vertex is more than 3.8 mm from the exact roll (measured 3.81 mm; the coarse lattice cannot
-    # carry a tighter curve), with no kinks at the couples' windows.
+    # neighbouring couples): the exact roll turns each 2.5 mm mesh edge by 2.86 degrees. Over the
+    # whole sheet, rim included, the embedding's neighbouring faces meet at most at 8 degrees
+    # (measured 7.99) and no vertex is more than 4 mm from the exact roll (measured 3.99 mm; the
+    # coarse lattice cannot carry a tighter curve), with no kinks at the couples' windows. Before
+    # the lattice had couples on its rim (docs/lattice.md, "Rim couples") the rim's extrapolated
+    # points kinked 16.7 degrees (6.67 farther than 2 cm from it).
     v, f = rect_sheet(0.2, 0.2, nx=81, ny=81)
     kappa = 20.0
 
@@ -110,11 +112,9 @@ def test_a_bent_lattice_bends_a_fine_mesh_smoothly():
 
     cs = ControlSurface(v, f, 0.025, 0.006)
     P = cs.deform(cs.embed(v), roll(cs.rest.reshape(-1, 3)))
-    angle, pairs = _dihedral(P, f)
-    centre = v[f[pairs[:, 0]]].mean(axis=1)
-    rim = np.minimum(np.minimum(centre[:, 0], 0.2 - centre[:, 0]), np.minimum(centre[:, 1], 0.2 - centre[:, 1]))
-    assert angle[rim > 0.02].max() < 6.8
-    assert np.abs(P - roll(v)).max() < 0.0039
+    angle, _ = _dihedral(P, f)
+    assert angle.max() < 8.1
+    assert np.abs(P - roll(v)).max() < 0.0041
 
 
 def test_a_spacing_too_coarse_for_the_shell_names_the_lattice():
@@ -130,8 +130,9 @@ def test_shape_operators_have_the_shells_curvatures(shell):
     to keep the Gaussian curvature (docs/dynamics.md §2): zero along the couple's axis; on the
     lantern (r = 0.1 m) 1/r round it and 0 along it, on the sphere 1/r both ways, on the flat
     sheet exactly zero. A least-squares fit over irregular neighbours: measured round the
-    lantern 9.26-10.73 /m (median 9.95) and along it at most 0.26 /m, on the sphere principal
-    curvatures 8.89-11.34 /m (median 9.70 and 10.39)."""
+    lantern 9.09-10.66 /m (median 9.94; its rim couples see neighbours on one side only) and
+    along it at most 0.13 /m, on the sphere principal curvatures 8.89-11.34 /m (median 9.70 and
+    10.39)."""
     name, V, F, cs, e = shell
     Sh = cs.shape_operators()
     assert Sh.shape == (cs.couples, 3, 3)
@@ -148,7 +149,7 @@ def test_shape_operators_have_the_shells_curvatures(shell):
         around = np.cross(z, n)
         assert np.abs(np.einsum("i,cij,j->c", z, Sh, z)).max() < 0.03 / 0.1
         kr = np.einsum("ci,cij,cj->c", around, Sh, around)
-        assert np.abs(kr * 0.1 - 1).max() < 0.08 and abs(np.median(kr) * 0.1 - 1) < 0.01
+        assert np.abs(kr * 0.1 - 1).max() < 0.095 and abs(np.median(kr) * 0.1 - 1) < 0.01
     else:
         assert np.abs(k * 0.1 - 1).max() < 0.15
         assert np.abs(np.median(k, axis=0) * 0.1 - 1).max() < 0.05
