@@ -306,9 +306,12 @@ void dijkstra(const Graph& g, MinHeap& heap, std::vector<double>& dist, std::vec
 }
 
 // Farthest-point sampling: each new seed is the vertex farthest (in graph distance) from all
-// seeds so far; unreached pieces are seeded first so that every piece gets a cell.
+// seeds so far; unreached pieces are seeded first so that every piece gets a cell. With `rim`
+// (per vertex, 1 on the boundary) the boundary is seeded first, until no boundary vertex lies
+// farther than rim_gap from a seed; *rim_count says how many seeds that took (they come first).
 std::vector<int> farthest_points(const Graph& g, int k, std::vector<int>* label,
-                                 const std::vector<std::uint8_t>* rim = nullptr, double rim_gap = 0.0) {
+                                 const std::vector<std::uint8_t>* rim = nullptr, double rim_gap = 0.0,
+                                 int* rim_count = nullptr) {
   const int n = static_cast<int>(g.area.size());
   std::vector<double> dist(n, kInf);
   label->assign(n, -1);
@@ -325,8 +328,6 @@ std::vector<int> farthest_points(const Graph& g, int k, std::vector<int>* label,
       if (rim && (*rim)[u]) far_rim.push({d, u});
     });
   };
-  // The rim first (CellOptions::rim_seeds): every boundary loop gets seeds until none of its
-  // vertices lies farther than rim_gap from one.
   for (int scan_rim = 0; rim && static_cast<int>(seeds.size()) < k;) {
     while (scan_rim < n && !((*rim)[scan_rim] && (*label)[scan_rim] < 0)) ++scan_rim;
     int s = -1;
@@ -340,6 +341,7 @@ std::vector<int> farthest_points(const Graph& g, int k, std::vector<int>* label,
     }
     seed(s);
   }
+  if (rim_count) *rim_count = static_cast<int>(seeds.size());
   int scan = 0;
   while (true) {
     while (scan < n && (*label)[scan] >= 0) ++scan;
@@ -558,9 +560,8 @@ SurfaceCells::SurfaceCells(const SurfVerts& V, const SurfFaces& F, const CellOpt
   // line halve their gaps, and at 0.5 a straight edge's gaps of exactly one spacing were
   // halved again (64 of a 20 cm sheet's 74 couples on its rim).
   const std::vector<std::uint8_t>* rim = opt.rim_seeds ? &dense_boundary : nullptr;
-  std::vector<int> seeds = farthest_points(g, k, &label, rim, 0.6 * h_);
   int rim_seeds = 0;
-  while (rim && rim_seeds < static_cast<int>(seeds.size()) && dense_boundary[seeds[rim_seeds]]) ++rim_seeds;
+  std::vector<int> seeds = farthest_points(g, k, &label, rim, 0.6 * h_, &rim_seeds);
   for (int it = 0; it < opt.lloyd_iters; ++it) {
     lloyd_step(m, g, label, 1e-9 * h_ / opt.refine, &seeds, rim, rim_seeds);
     voronoi(g, seeds, &label);
