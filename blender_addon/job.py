@@ -256,7 +256,7 @@ class BakeJob:
         # frames are sampled once it has: _await_shape).
         self.spacing = 0.5 * inputs.cell_spacing(world, tris, settings.cells)
         self.lattice = int(settings.lattice)
-        self.crumple_gain = float(settings.crumple_gain)  # the frame the bake starts from's
+        self.crumple_gain = float(settings.crumple_gain)  # Crumple Amount as the bake starts
         self.max_strain = self.max_strain_frame = None  # set when a moving bake finishes
         self.shape = None  # what the core made of the sheet (worker.simulation_shape)
         edges = inputs.group_edges(objs) if self.grouped else inputs.mesh_edges(obj)

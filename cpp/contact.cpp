@@ -198,7 +198,7 @@ void FloorSupport::offsets(const RowMatX3& x, double floor_z, Eigen::VectorXd& o
   const int C = static_cast<int>(reach_.size());
   // An offset moves only when the pose moved it by more than a hair: recomputed to rounding
   // each substep, a resting lantern's rim flickered in and out of contact (273 CG iterations a
-  // frame against 1).
+  // frame against 13).
   const double hair = 1e-3 * half_;
   const bool fresh = out.size() != 2 * C;
   if (fresh) out.resize(2 * C);

@@ -122,26 +122,25 @@ void ImplicitSolver::apply_A(double h, const double* in, double* out) {
   const double h2 = h * h;
   parallel_for(0, na, kRowCost, [&](long a_) {
     const int a = static_cast<int>(a_);
-    const int v = s_.active[a];
-    Eigen::Vector3d y = mat3(B.diag, a) * Eigen::Map<const Eigen::Vector3d>(in + 3 * a);
-    for (int q = s_.incidence.start[v]; q < s_.incidence.start[v + 1]; ++q) {
-      const int so = s_.slot[s_.incidence.other[q]];
-      if (so >= 0)
-        y -= h2 * load_sym(B.jac + 6 * s_.incidence.spring[q]) * Eigen::Map<const Eigen::Vector3d>(in + 3 * so);
-    }
-    vec3(out, a) = y;
+    vec3(out, a) = row_of_A(h2, a, in);
   });
+}
+
+Eigen::Vector3d ImplicitSolver::row_of_A(double h2, int a, const double* in) {
+  Buffers B = buffers();
+  const int v = s_.active[a];
+  Eigen::Vector3d y = mat3(B.diag, a) * Eigen::Map<const Eigen::Vector3d>(in + 3 * a);
+  for (int q = s_.incidence.start[v]; q < s_.incidence.start[v + 1]; ++q) {
+    const int so = s_.slot[s_.incidence.other[q]];
+    if (so >= 0)
+      y -= h2 * load_sym(B.jac + 6 * s_.incidence.spring[q]) * Eigen::Map<const Eigen::Vector3d>(in + 3 * so);
+  }
+  return y;
 }
 
 Eigen::Vector3d ImplicitSolver::constraint_impulse(double h, int a) {
   Buffers B = buffers();
-  const int v = s_.active[a];
-  Eigen::Vector3d y = mat3(B.diag, a) * vec3(B.dv, a);
-  for (int q = s_.incidence.start[v]; q < s_.incidence.start[v + 1]; ++q) {
-    const int so = s_.slot[s_.incidence.other[q]];
-    if (so >= 0) y -= h * h * load_sym(B.jac + 6 * s_.incidence.spring[q]) * vec3(B.dv, so);
-  }
-  return y - vec3(B.b, a);
+  return row_of_A(h * h, a, B.dv) - vec3(B.b, a);
 }
 
 void ImplicitSolver::precondition(const double* in, double* out) {

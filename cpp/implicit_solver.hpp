@@ -89,6 +89,8 @@ class ImplicitSolver {
   void factor_pattern();
   void factor_fill(double h);
   void apply_A(double h, const double* in, double* out);
+  // (A in) at active slot a, h2 = h^2.
+  Eigen::Vector3d row_of_A(double h2, int a, const double* in);
   void precondition(const double* in, double* out);
 
   View s_;
