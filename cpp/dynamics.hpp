@@ -165,6 +165,7 @@ class LatticeDynamics {
   const Eigen::VectorXd& strength() const { return strength_; }
   /// @brief Per control vertex; pinned ones never move.
   void set_pinned(const std::vector<std::uint8_t>& pinned);
+  const std::vector<std::uint8_t>& pinned() const { return pinned_; }
   /// @brief A curved shell's floor (null: every control vertex touches it at floor_z). A
   /// shell's couples need not reach its lowest points: a lantern's lowest couples sit above its
   /// rim, and which points are lowest changes as a sphere rolls (FloorSupport, contact.hpp).

@@ -67,6 +67,8 @@ const std::vector<param::Field<ShellParams>>& ShellParams::fields() {
       field("ash_strength", &P::ash_strength, within(0, 1), "share of the springs' stiffness burnt sheet keeps"),
       field("mesh_tolerance", &P::mesh_tolerance, within(0, 1),
             "share of the sheet's size a couple drifts before its mesh vertices are redone (0: exact)"),
+      field("imperfection", &P::imperfection, within(0, 0.1),
+            "share of the sheet's size it starts bowed by along its normals (0: perfectly flat)"),
       field("seed", &P::seed, "seeds the particles' random stream"),
   };
   return table;
@@ -119,6 +121,7 @@ Shell::Shell(const Sheet& sheet, const ShellParams& params, const std::vector<do
   finish(cell_mass, N * N, sheet.inside(), grid_topology(M_), per_paper_cell * per_paper_cell);
   find_pieces();
   if (!pinned.empty()) pin(pinned);
+  bow();
 }
 
 Shell::Shell(const SurfaceCells& cells, const RowMatX3& vertices, const RowMatX3i& faces,
@@ -186,6 +189,7 @@ Shell::Shell(const SurfaceCells& cells, const RowMatX3& vertices, const RowMatX3
   find_pieces();
   if (params_.has_floor) set_floor_offsets();
   if (!pinned.empty()) pin(pinned);
+  bow();
 }
 
 namespace {
@@ -366,6 +370,40 @@ void Shell::pin(const std::vector<std::uint8_t>& pinned) {
       if (w[k] > 1e-12) held[2 * cp[k]] = held[2 * cp[k] + 1] = 1;
   }
   dynamics_->set_pinned(held);
+}
+
+void Shell::bow() {
+  // A flat sheet starts as a dome along its normal (bottom -> top): imperfection x its size at
+  // its centroid, 0 at its farthest couple, times the share of gravity in its plane,
+  // 1 - |n . g| / |g|. The rest lengths stay flat, so a sheet its weight leaves stable springs
+  // back flat, and one its weight loads past buckling (a tall sheet pinned along its bottom:
+  // Greenhill's column, scripts/greenhill.py) falls, as a real sheet does; without it a 1.4 m
+  // paper sheet stood in its plane for ever (issue #12). Across its plane the weight itself
+  // bends a sheet far more than L/1000 (a lying sheet keeps its exact start); a curved or folded
+  // shell is not symmetric about a plane, its shape is its own imperfection.
+  const Eigen::Vector3d g = params_.dynamics.gravity;
+  if (!(params_.imperfection > 0) || !(g.norm() > 0) || !rest_is_flat()) return;
+  const RowMatX3& r = lattice_->rest();
+  const Eigen::RowVector3d n = (r.row(1) - r.row(0)).normalized();
+  const double in_plane = 1.0 - std::abs(n.dot(g.normalized().transpose()));
+  const int C = lattice_->couples();
+  Eigen::RowVector3d centre = Eigen::RowVector3d::Zero();
+  for (int c = 0; c < C; ++c) centre += 0.5 * (r.row(2 * c) + r.row(2 * c + 1));
+  centre /= C;
+  double R2 = 0;
+  for (int c = 0; c < C; ++c) R2 = std::max(R2, (0.5 * (r.row(2 * c) + r.row(2 * c + 1)) - centre).squaredNorm());
+  const double height = params_.imperfection * 2.0 * std::sqrt(R2) * in_plane;
+  if (!(height > 0)) return;
+  const std::vector<std::uint8_t>& pinned = dynamics_->pinned();
+  RowMatX3 x = lattice_->positions();
+  for (int c = 0; c < C; ++c) {
+    if (pinned[2 * c] || pinned[2 * c + 1]) continue;
+    const Eigen::RowVector3d mid = 0.5 * (r.row(2 * c) + r.row(2 * c + 1));
+    const Eigen::RowVector3d d = height * (1.0 - (mid - centre).squaredNorm() / R2) * n;
+    x.row(2 * c) += d;
+    x.row(2 * c + 1) += d;
+  }
+  dynamics_->set_state(x, RowMatX3::Zero(x.rows(), 3));
 }
 
 bool Shell::rest_is_flat() const {

@@ -29,6 +29,9 @@ namespace thinburn {
 /// by at most twice that, 2 um on a 1 m sheet, far below a pixel (docs/lattice.md, "The mesh's
 /// tolerance").
 constexpr double kDefaultMeshTolerance = 1e-6;
+/// The sheet's crookedness at the start, as a share of its size: engineering's L/1000 for a
+/// column's initial bow (docs/dynamics.md §1.2).
+constexpr double kDefaultImperfection = 1e-3;
 
 /// @brief What the shell needs of the simulation's parameters.
 struct ShellParams {
@@ -38,6 +41,10 @@ struct ShellParams {
   double floor_z = 0.0;
   double ash_strength = 0.1;     ///< share of the springs' stiffness burnt sheet keeps
   double mesh_tolerance = kDefaultMeshTolerance;  ///< of the sheet's size; 0: the mesh is exact
+  /// The sheet's crookedness at the start: its couples bowed along their normals by this share
+  /// of its size at the centre (docs/dynamics.md §1.2). No sheet is flat; a perfectly flat one
+  /// pinned along its bottom would stand in its plane for ever, however tall.
+  double imperfection = kDefaultImperfection;
   std::uint64_t seed = 0;
   DynamicsParams dynamics;
   ParticleParams particles;
@@ -150,6 +157,7 @@ class Shell {
   void finish(const std::vector<double>& cell_mass, int num_cells, const std::vector<std::uint8_t>& inside,
               const LatticeTopology& topology, double per_paper_cell);
   void pin(const std::vector<std::uint8_t>& pinned);
+  void bow();
   void set_floor_offsets();
   void find_pieces();
   void piece_seeds(const SurfaceCells& cells, const RowMatX3i& faces, std::vector<int>* vertex_seed,

@@ -91,6 +91,8 @@ const std::vector<param::Field<SimulationParams>>& SimulationParams::fields() {
       field("floor_z", &P::floor_z, "m: the floor's height"),
       field("mesh_tolerance", &P::mesh_tolerance, within(0, 1),
             "share of the sheet's size a couple drifts before its mesh vertices are redone (0: exact)"),
+      field("imperfection", &P::imperfection, within(0, 0.1),
+            "share of the sheet's size it starts bowed by along its normals (0: perfectly flat)"),
   };
   return table;
 }
@@ -378,6 +380,7 @@ ShellParams Simulation::shell_params() const {
   sp.floor_z = params_.floor_z;
   sp.ash_strength = params_.ash_strength;
   sp.mesh_tolerance = params_.mesh_tolerance;
+  sp.imperfection = params_.imperfection;
   sp.seed = params_.seed;
   sp.dynamics = params_.dynamics;
   sp.particles = params_.particles;

@@ -72,6 +72,8 @@ struct SimulationParams {
   /// Share of the sheet's size a couple drifts before the mesh vertices it carries are redone;
   /// each vertex is then within twice that of its exact place (0: exact, bit for bit).
   double mesh_tolerance = kDefaultMeshTolerance;
+  /// Share of the sheet's size it starts bowed by along its normals (ShellParams::imperfection).
+  double imperfection = kDefaultImperfection;
   DynamicsParams dynamics;
   ParticleParams particles;
   BendingParams bending;

@@ -160,7 +160,11 @@ class Simulation:
           couple that drifted less than that since its mesh vertices were last deformed keeps
           them as they are, so each vertex is within twice that of its exact place, 2 µm on a
           1 m sheet; 0: every vertex of a moved couple is redone, bit for bit a full deform;
-          a grid lattice's mesh only, docs/lattice.md "The mesh's tolerance").
+          a grid lattice's mesh only, docs/lattice.md "The mesh's tolerance");
+        * the start: ``imperfection`` (share of the sheet's size a flat sheet starts bowed by
+          along its normal, times the share of gravity in its plane; default 1e-3: a sheet
+          pinned along its bottom falls once taller than Greenhill's column, docs/dynamics.md
+          §1.2; 0: perfectly flat).
     """
 
     def __init__(self, vertices, faces, uv=None, material="paper", cells=128, seed=0,
