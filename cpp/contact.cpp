@@ -210,8 +210,14 @@ void FloorSupport::offsets(const RowMatX3& x, double floor_z, Eigen::VectorXd& o
       low = std::numeric_limits<double>::infinity();
       for (int k = start_[c]; k < start_[c + 1]; ++k) low = std::min(low, point_height(x, points_[k]));
     }
+    // A couple without points (a flat sheet's: its mesh is the lattice's mid-surface) rests by
+    // its centre through its lower vertex alone, as a lying couple's bottom vertex always did:
+    // both take the lower one's offset, so the upper one, carried by the thickness spring,
+    // touches only when the couple lies on its side.
+    const bool by_centre = start_[c + 1] == start_[c];
+    const double lower = std::min(x(2 * c, 2), x(2 * c + 1, 2));
     for (int v = 2 * c; v < 2 * c + 2; ++v) {
-      const double offset = x(v, 2) - low + half_;
+      const double offset = (by_centre ? lower : x(v, 2)) - low + half_;
       if (fresh || std::abs(offset - out[v]) > hair) out[v] = offset;
     }
   }

@@ -122,6 +122,7 @@ Shell::Shell(const Sheet& sheet, const ShellParams& params, const std::vector<do
   find_pieces();
   if (!pinned.empty()) pin(pinned);
   bow();
+  if (params_.has_floor) set_centre_floor();
 }
 
 Shell::Shell(const SurfaceCells& cells, const RowMatX3& vertices, const RowMatX3i& faces,
@@ -250,6 +251,18 @@ void Shell::set_floor_offsets() {
   auto height = [this](const RowMatX3& x, int i) { return control_->point(surface_vertices_, i, x).z(); };
   dynamics_->set_floor_support(
       std::make_unique<FloorSupport>(std::move(start), std::move(points), std::move(reach), height, 0.5 * thickness_));
+}
+
+void Shell::set_centre_floor() {
+  // A flat sheet's mesh lies in its lattice's mid-surface, a convex combination of the couples'
+  // centres, so a control vertex touches the floor when its couple's centre does: its floor
+  // follows the couple's tilt (FloorSupport with no mesh points). A floor half a thickness
+  // under the sheet's for every vertex held a lying sheet right, but a sheet standing on its
+  // edge sank half a thickness into it and the mesh's clamp to the floor crushed its bottom
+  // 5 mm flat (a 20 cm sheet: its bottom-row edges 100 % short).
+  const int C = lattice_->couples();
+  dynamics_->set_floor_support(std::make_unique<FloorSupport>(std::vector<int>(C + 1, 0), std::vector<int>{},
+                                                              Eigen::VectorXd::Zero(C), nullptr, 0.5 * thickness_));
 }
 
 namespace {

@@ -159,6 +159,7 @@ class Shell {
   void pin(const std::vector<std::uint8_t>& pinned);
   void bow();
   void set_floor_offsets();
+  void set_centre_floor();
   void find_pieces();
   void piece_seeds(const SurfaceCells& cells, const RowMatX3i& faces, std::vector<int>* vertex_seed,
                    std::vector<int>* cell_seed) const;
