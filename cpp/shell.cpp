@@ -112,6 +112,8 @@ Shell::Shell(const Sheet& sheet, const ShellParams& params, const std::vector<do
   // (a camera frames the sheet), and the model takes sheets from micrometres to kilometres.
   const double mesh_tol = params_.mesh_tolerance * std::max(sheet.size_u(), sheet.size_v());
   mesh_deform_ = std::make_unique<CachedDeform>(vertex_embedding_, lattice_->couples(), mesh_tol);
+  if (mesh_interp_ == LatticeInterp::QuadraticBSpline)
+    fold_blend_ = std::make_unique<FoldBlend>(lattice_->embed(coords, sheet.vertices(), LatticeInterp::Trilinear));
   cell_area_.assign(N * N, sheet.du() * sheet.dv());
   // Eq 3 sums over the ignition points, the burning cells: the same fire at twice the grid
   // resolution has four times the points. Each cell counts as its share of a cell of the
@@ -475,6 +477,13 @@ void Shell::set_colliders(std::shared_ptr<const Colliders> c, double margin, int
   // Built only with colliders: a scene without any pays nothing.
   ContactSamples s;
   if (c && samples > 0) s = control_ ? surface_contact_samples(samples) : contact_samples(samples);
+  {
+    // The samples ride the spline (contact_samples): a mesh that followed the couples at a fold
+    // would hang in the air over the collider that holds it (a cloth on a 1 cm rod: 22.9 mm
+    // above the rod's top against 9.4 mm), so a sheet with samples keeps the spline's mesh.
+    std::lock_guard<std::mutex> lock(mesh_mutex_);
+    mesh_follows_folds_ = s.vertex.empty();
+  }
   dynamics_->set_colliders(std::move(c), margin, std::move(s));
 }
 
@@ -693,6 +702,7 @@ void Shell::vertex_positions(RowMatX3& out) const {
   // never goes through it. Clamped inside deform's pass: a second pass over a strided column
   // cost as much as the deform itself on a million-vertex mesh.
   mesh_deform_->deform_into(*lattice_, vertex_embedding_, z_min, out);
+  if (fold_blend_ && mesh_follows_folds_) fold_blend_->apply(*lattice_, z_min, out);
 }
 
 void Shell::vertex_positions_into(Eigen::Ref<RowMatX3> out) const {
@@ -706,6 +716,7 @@ void Shell::vertex_positions_into(Eigen::Ref<RowMatX3> out) const {
   PhaseTimer timer(times_, Phase::Mesh);
   const double z_min = params_.has_floor ? params_.floor_z : -std::numeric_limits<double>::infinity();
   mesh_deform_->deform_into(*lattice_, vertex_embedding_, z_min, out);
+  if (fold_blend_ && mesh_follows_folds_) fold_blend_->apply(*lattice_, z_min, out);
 }
 
 void Shell::hand_over_masses_and_strength() {

@@ -16,6 +16,7 @@
 #include "bending.hpp"
 #include "control_surface.hpp"
 #include "dynamics.hpp"
+#include "fold_blend.hpp"
 #include "lattice.hpp"
 #include "particles.hpp"
 #include "phase_times.hpp"
@@ -186,6 +187,8 @@ class Shell {
   // The mesh's deformed vertices kept between frames: only those near moving couples are
   // redone (a grid lattice's mesh; vertex_positions is const, the pointer shallow).
   std::unique_ptr<CachedDeform> mesh_deform_;
+  std::unique_ptr<FoldBlend> fold_blend_;  // a flat sheet's mesh where its lattice folds (null: none)
+  bool mesh_follows_folds_ = true;          // false while collider samples ride the spline (mesh_mutex_)
   Eigen::VectorXd control_mass_, control_area_, burnt_area_, strength_;
   bool mass_dirty_ = false;
   bool strength_dirty_ = false;
