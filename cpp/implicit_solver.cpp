@@ -117,7 +117,6 @@ void ImplicitSolver::build_jacobi(double h) {
 }
 
 void ImplicitSolver::apply_A(double h, const double* in, double* out) {
-  Buffers B = buffers();
   const int na = static_cast<int>(s_.active.size());
   const double h2 = h * h;
   parallel_for(0, na, kRowCost, [&](long a_) {
