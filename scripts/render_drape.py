@@ -14,9 +14,10 @@ largest motion, the largest edge strain. Writes docs/images/drape_<scene>_<frame
 An artist's trial (docs/blender.md): ``table`` (A4 paper on a cube with Collision physics, no
 Floor; ``--table-floor`` makes the cube its Floor Object instead), ``silk`` (a silk curtain
 pinned along its top in a Wind field, with ``--stretch-limit``), ``lantern`` (a cylinder
-without caps lit at its bottom), ``rod`` (cloth dropped over a thin cylinder with Collision).
-``--without-addon`` then saves the .blend, disables the add-on, reopens it, renders the same
-frames again and prints the largest pixel difference.
+without caps lit at its bottom), ``rod`` (cloth dropped over a thin cylinder with Collision),
+``pile`` (cloth let go upright on a table: it folds into a pile). ``--without-addon`` then
+saves the .blend, disables the add-on, reopens it, renders the same frames again and prints
+the largest pixel difference.
 """
 from __future__ import annotations
 
@@ -243,8 +244,37 @@ def rod(args):
     return sheet, ((0.5, -0.55, 0.45), (0.0, 0.0, 0.2)), measure
 
 
+def pile(args):
+    """A 40 cm cloth standing upright on the table, let go: it collapses into folds (the mesh
+    follows the lattice's couples where they fold, docs/lattice.md), lit at a bottom corner."""
+    table = H.make_box_table(top=0.0, size=1.2)
+    table.data.materials.append(_material("Table", (0.12, 0.08, 0.05)))
+    n = args.n
+    xs = np.linspace(-0.2, 0.2, n)
+    zs = np.linspace(0.02, 0.42, n)
+    verts = [(x, 0.0, z) for z in zs for x in xs]
+    faces = [(j * n + i, j * n + i + 1, (j + 1) * n + i + 1, (j + 1) * n + i)
+             for j in range(n - 1) for i in range(n - 1)]
+    sheet = H.link_mesh("Cloth", verts, faces)
+    sheet.data.materials.append(_material("Cotton", (0.7, 0.62, 0.5)))
+    import bpy
+    bpy.ops.object.shade_smooth()
+    _common(sheet, table, args, "cloth")
+    H.make_igniter(sheet, (-0.2, 0.0, 0.02), lit_from=1, radius=args.radius)
+    edges = H.mesh_edges(sheet)
+
+    def measure(rest, world):
+        l0 = np.linalg.norm(rest[edges[:, 0]] - rest[edges[:, 1]], axis=1)
+        strain = [np.abs(np.linalg.norm(f[edges[:, 0]] - f[edges[:, 1]], axis=1) / l0 - 1.0) for f in world]
+        return {"highest_m_per_24_frames": [round(float(f[:, 2].max()), 4) for f in world[::24]],
+                "edge_strain_p99_per_24_frames": [round(float(np.percentile(s_, 99)), 4) for s_ in strain[::24]],
+                "max_edge_strain": round(float(max(s_.max() for s_ in strain)), 4),
+                "below_table_vertex_frames": int(np.count_nonzero(world[..., 2] < 0.0))}
+    return sheet, ((0.55, -0.6, 0.35), (0.0, 0.0, 0.08)), measure
+
+
 SCENES = {"drape": drape, "curtain": curtain, "table": table, "silk": silk, "lantern": lantern,
-          "rod": rod}
+          "rod": rod, "pile": pile}
 
 
 def bake_and_measure(name, args):
