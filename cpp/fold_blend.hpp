@@ -1,5 +1,6 @@
 #pragma once
-/// @brief Where a grid lattice folds, the mesh follows its couples (docs/lattice.md, "Folds").
+/// @brief Where a grid lattice folds, the mesh follows its couples (docs/lattice.md, "Embedding
+/// and deformation": "Where the lattice folds, the mesh follows the couples").
 ///
 /// A flat sheet's mesh rides the lattice's quadratic B-spline, which is C1 across control cells
 /// (no facets) but approximates its control points: it cuts the corner of a fold between
