@@ -31,7 +31,8 @@ class FoldBlend {
 
   /// Fold angles (degrees) between neighbouring couple-to-couple segments: the blend starts at
   /// kFrom (the demo scenes' lattices stay below it: silk held over its table bends 19.1 at
-  /// most, paper 13.7, cloth 11.0) and is whole at kTo (the spline there is 4 % short).
+  /// most, the others 16 at most; scripts/lattice_turns.py) and is whole at kTo (the spline
+  /// there is 4 % short).
   static constexpr double kFrom = 20.0, kTo = 40.0;
 
  private:

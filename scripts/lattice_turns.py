@@ -3,7 +3,7 @@ docs/lattice.md, "Where the lattice folds"): the demo scenes at 64 cells, sample
 and the 20 cm cloth dropped upright into a pile (cells 128, 4 s). FoldBlend blends the mesh
 towards the couples from 20 degrees on.
 
-    python scripts/lattice_turns.py [--seconds 30] [--scenes paper silk cloth pile]
+    python scripts/lattice_turns.py [--seconds 30] [--scenes paper silk cloth curtain hard_paper pile]
 """
 import argparse
 
@@ -31,7 +31,7 @@ def turns(sim):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seconds", type=float, default=30.0)
-    ap.add_argument("--scenes", nargs="+", default=["paper", "silk", "cloth", "pile"])
+    ap.add_argument("--scenes", nargs="+", default=["paper", "silk", "cloth", "curtain", "hard_paper", "pile"])
     a = ap.parse_args()
     for name in a.scenes:
         if name == "pile":
