@@ -203,13 +203,6 @@ void FloorSupport::offsets(const RowMatX3& x, double floor_z, Eigen::VectorXd& o
   const bool fresh = out.size() != 2 * C;
   if (fresh) out.resize(2 * C);
   for (int c = 0; c < C; ++c) {
-    const double mid = 0.5 * (x(2 * c, 2) + x(2 * c + 1, 2));
-    // Out of reach of the floor (with thicknesses to spare): any offset that keeps it free.
-    double low = mid - reach_[c];
-    if (low <= floor_z + 4.0 * half_ && start_[c + 1] > start_[c]) {
-      low = std::numeric_limits<double>::infinity();
-      for (int k = start_[c]; k < start_[c + 1]; ++k) low = std::min(low, point_height(x, points_[k]));
-    }
     // A couple without points (a flat sheet's: its mesh is the lattice's mid-surface) rests by
     // its centre: a couple of the rest thickness tilted to the unit direction n has its lower
     // vertex half a thickness times |n_z| below it, and both vertices are held there (the upper
@@ -225,6 +218,12 @@ void FloorSupport::offsets(const RowMatX3& x, double floor_z, Eigen::VectorXd& o
         if (fresh || std::abs(offset - out[v]) > hair) out[v] = offset;
       }
       continue;
+    }
+    // Out of reach of the floor (with thicknesses to spare): any offset that keeps it free.
+    double low = 0.5 * (x(2 * c, 2) + x(2 * c + 1, 2)) - reach_[c];
+    if (low <= floor_z + 4.0 * half_) {
+      low = std::numeric_limits<double>::infinity();
+      for (int k = start_[c]; k < start_[c + 1]; ++k) low = std::min(low, point_height(x, points_[k]));
     }
     for (int v = 2 * c; v < 2 * c + 2; ++v) {
       const double offset = x(v, 2) - low + half_;

@@ -61,8 +61,9 @@ inline Eigen::Vector3d positional_friction(const Eigen::Vector3d& p, const Eigen
   return p - (len <= hold ? 1.0 : hold / len) * slide;
 }
 
-/// @brief A curved shell's floor (docs/lattice.md, "Floor"): per couple,
-/// the mesh points it carries a fair share of. Which of them is lowest depends on how the shell
+/// @brief A shell's floor (docs/lattice.md, "Floor"): per couple, the mesh points it carries
+/// a fair share of (a curved shell's), or none (a flat sheet's, whose mesh is the lattice's
+/// mid-surface: its couples rest by their centres, by their tilt). Which of them is lowest depends on how the shell
 /// lies now, so offsets() places each control vertex above the floor by its height over the
 /// lowest of its couple's points where they are now (couples within reach of the floor only),
 /// plus the half thickness by which the dynamics' floor lies below the sheet's (a flat sheet's
@@ -72,7 +73,7 @@ class FloorSupport {
   /// @brief Height (m) of mesh point `point` for control positions x.
   using Height = std::function<double(const RowMatX3& x, int point)>;
   /// @brief points[start[c] .. start[c + 1]): the mesh points couple c carries (may be none:
-  /// then its mid-point); reach[c]: the farthest of them from its mid-point at rest, m.
+  /// then it rests by its centre); reach[c]: the farthest of them from its mid-point at rest, m.
   FloorSupport(std::vector<int> start, std::vector<int> points, Eigen::VectorXd reach, Height height,
                double half_thickness);
   /// @brief Per control vertex of positions x (2 couples rows), its height above the floor

@@ -55,13 +55,12 @@ void FoldBlend::couple_weights(const FfdLattice& lattice) {
     }
 }
 
-long FoldBlend::apply(const FfdLattice& lattice, double z_min, Eigen::Ref<RowMatX3> out) {
+void FoldBlend::apply(const FfdLattice& lattice, double z_min, Eigen::Ref<RowMatX3> out) {
   if (out.rows() != tri_.size()) throw std::invalid_argument("FoldBlend: out has the wrong number of rows");
   couple_weights(lattice);
-  if (!any_) return 0;
+  if (!any_) return;
   const RowMatX3& x = lattice.positions();
   const RowMatX3& rest = lattice.rest();
-  long moved = 0;
   for (Eigen::Index p = 0; p < tri_.size(); ++p) {
     const std::int32_t* cp = tri_.couple.data() + 4 * p;
     const double* wt = tri_.weight.data() + 4 * p;
@@ -77,9 +76,7 @@ long FoldBlend::apply(const FfdLattice& lattice, double z_min, Eigen::Ref<RowMat
     }
     out.row(p) += w * (q - out.row(p));
     out(p, 2) = std::max(out(p, 2), z_min);
-    ++moved;
   }
-  return moved;
 }
 
 }  // namespace thinburn

@@ -26,8 +26,8 @@ class FoldBlend {
   /// @brief trilinear: the mesh's points embedded trilinearly in the same M x M grid lattice.
   explicit FoldBlend(Embedding trilinear);
   /// @brief Moves the points of out (the spline's mesh) towards the trilinear map where the
-  /// lattice folds now, keeping z >= z_min; returns how many points it moved.
-  long apply(const FfdLattice& lattice, double z_min, Eigen::Ref<RowMatX3> out);
+  /// lattice folds now, keeping z >= z_min.
+  void apply(const FfdLattice& lattice, double z_min, Eigen::Ref<RowMatX3> out);
 
   /// Fold angles (degrees) between neighbouring couple-to-couple segments: the blend starts at
   /// kFrom (the demo scenes' lattices stay below it: silk held over its table bends 19.1 at

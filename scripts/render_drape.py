@@ -92,16 +92,20 @@ def drape(args):
     return sheet, ((0.42, -0.5, 0.42), (0.0, 0.0, 0.1)), measure
 
 
+def _upright_sheet(name, xs, zs):
+    """A grid sheet in the xz-plane (y = 0) over xs by zs, rows of xs from the lowest z up."""
+    nx, nz = len(xs), len(zs)
+    verts = [(x, 0.0, z) for z in zs for x in xs]
+    faces = [(j * nx + i, j * nx + i + 1, (j + 1) * nx + i + 1, (j + 1) * nx + i)
+             for j in range(nz - 1) for i in range(nx - 1)]
+    return H.link_mesh(name, verts, faces)
+
+
 def curtain(args):
     table = H.make_box_table(top=0.0, size=1.2)
     table.data.materials.append(_material("Table", (0.12, 0.08, 0.05)))
     nx, nz = 49, 65
-    xs = np.linspace(-0.15, 0.15, nx)
-    zs = np.linspace(0.10, 0.50, nz)
-    verts = [(x, 0.0, z) for z in zs for x in xs]
-    faces = [(j * nx + i, j * nx + i + 1, (j + 1) * nx + i + 1, (j + 1) * nx + i)
-             for j in range(nz - 1) for i in range(nx - 1)]
-    sheet = H.link_mesh("Curtain", verts, faces)
+    sheet = _upright_sheet("Curtain", np.linspace(-0.15, 0.15, nx), np.linspace(0.10, 0.50, nz))
     sheet.data.materials.append(_material("Linen", (0.75, 0.7, 0.62)))
     pinned = list(range(nx * (nz - 1), nx * nz))
     sheet.vertex_groups.new(name="top").add(pinned, 1.0, "REPLACE")
@@ -250,12 +254,7 @@ def pile(args):
     table = H.make_box_table(top=0.0, size=1.2)
     table.data.materials.append(_material("Table", (0.12, 0.08, 0.05)))
     n = args.n
-    xs = np.linspace(-0.2, 0.2, n)
-    zs = np.linspace(0.02, 0.42, n)
-    verts = [(x, 0.0, z) for z in zs for x in xs]
-    faces = [(j * n + i, j * n + i + 1, (j + 1) * n + i + 1, (j + 1) * n + i)
-             for j in range(n - 1) for i in range(n - 1)]
-    sheet = H.link_mesh("Cloth", verts, faces)
+    sheet = _upright_sheet("Cloth", np.linspace(-0.2, 0.2, n), np.linspace(0.02, 0.42, n))
     sheet.data.materials.append(_material("Cotton", (0.7, 0.62, 0.5)))
     import bpy
     bpy.ops.object.shade_smooth()
