@@ -21,6 +21,10 @@ constexpr int kS = SurfaceEmbedding::kStencil;
 // Ridge on the MLS's normal term, per unit window: couples spread across the normal by more
 // than about sqrt(kNormalRidge) R make the weights reproduce linear fields in 3-D.
 constexpr double kNormalRidge = 1e-4;
+// Edges where the shell turns by more than this are creases (hinges; docs/lattice.md,
+// "Creases"). Blender shades edges sharper than 30 degrees flat by default; a cylinder of 8
+// sides (45 degrees) is a prism of creases, one of 12 (30 degrees) still a smooth tube.
+constexpr double kCreaseAngle = 25.0 * 3.14159265358979323846 / 180.0;
 
 // Wendland's C2 window: 1 at q = 0, 0 with zero first and second derivatives at q = 1.
 double wendland(double q) {
@@ -45,6 +49,7 @@ ControlSurface::ControlSurface(const SurfVerts& vertices, const SurfFaces& faces
   // and the lever turned their twist into stretch (a pleated curtain's side edge in wind:
   // single edges 2.3x; docs/lattice.md, "Rim couples").
   opt.rim_seeds = true;
+  opt.crease_angle = kCreaseAngle;
   coarse_ = std::make_shared<const SurfaceCells>(vertices, faces, opt);
   const int C = coarse_->size();
   if (C < 3)
@@ -153,6 +158,17 @@ void ControlSurface::gather(int start, std::vector<int>& out, std::vector<int>& 
   }
 }
 
+void ControlSurface::keep_side(int side, std::vector<int>& cand) const {
+  // Across a crease the two sides turn independently: a window mixing their couples bent the
+  // sheet near the fold (a folded letter's edges within 1 cm of it: 1.8-2.1 % at 40 s, p99).
+  // A point with fewer than 3 couples of its side in its rings keeps them all.
+  if (side < 0) return;
+  std::vector<int> own;
+  for (int c : cand)
+    if (coarse_->on_side(c, side)) own.push_back(c);
+  if (own.size() >= 3) cand.swap(own);
+}
+
 SurfaceEmbedding ControlSurface::embed(const RowMatX3& points, const std::vector<int>& seeds) const {
   if (!points.allFinite()) throw std::invalid_argument("points must be finite");
   if (!seeds.empty() && seeds.size() != static_cast<std::size_t>(points.rows()))
@@ -175,6 +191,9 @@ SurfaceEmbedding ControlSurface::embed(const RowMatX3& points, const std::vector
     const Eigen::Vector3d x = points.row(i).transpose();
     const int c0 = seeds.empty() || seeds[i] < 0 || seeds[i] >= coarse_->size() ? coarse_->nearest(x) : seeds[i];
     gather(c0, cand, stamp, id);
+    Eigen::Vector3d side_normal;
+    const int side = coarse_->side_of(x, &side_normal);
+    keep_side(side, cand);
     // Widen the window until three couples see the point (a point far out at a piece's rim).
     double R = R0;
     for (int tries = 0; tries < 4; ++tries, R *= 1.5) {
@@ -197,6 +216,9 @@ SurfaceEmbedding ControlSurface::embed(const RowMatX3& points, const std::vector
       nx += phi * nrm[c];
     }
     nx = nx.norm() > 0 ? Eigen::Vector3d(nx.normalized()) : nrm[c0];
+    // Near a crease the couples on it carry the fold's mean normal: the MLS's frame takes the
+    // side's own (its tangent plane is where the fit is linear, the normal term ridged).
+    if (side >= 0) nx = side_normal;
     // Linear MLS: w_k = phi_k [1 0 0 0] A^-1 p_k, p_k = (1, t1.d_k, t2.d_k, n.d_k) / R with d_k =
     // y_k - x in x's frame (t1, t2, n), A = sum phi_k p_k p_k^T + ridge on the normal term. Where
     // the couples spread across the normal (a curve, a crease) the weights reproduce any linear

@@ -80,6 +80,7 @@ class ControlSurface {
  private:
   void build_topology();
   void gather(int start, std::vector<int>& out, std::vector<int>& stamp, int& id) const;
+  void keep_side(int side, std::vector<int>& cand) const;
 
   std::shared_ptr<const SurfaceCells> coarse_;
   double thickness_;

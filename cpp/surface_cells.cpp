@@ -1,5 +1,7 @@
 #include "surface_cells.hpp"
 
+#include "creases.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -21,6 +23,8 @@ using Vec3 = Eigen::Vector3d;
 using Face = std::array<int, 3>;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kPi = 3.14159265358979323846;
+// A cell lies on the sides of the faces within this many spacings of it (cell_sides).
+constexpr double kCreaseReach = 0.25;
 
 struct Mesh {
   std::vector<Vec3> v;
@@ -311,7 +315,7 @@ void dijkstra(const Graph& g, MinHeap& heap, std::vector<double>& dist, std::vec
 // farther than rim_gap from a seed; *rim_count says how many seeds that took (they come first).
 std::vector<int> farthest_points(const Graph& g, int k, std::vector<int>* label,
                                  const std::vector<std::uint8_t>* rim = nullptr, double rim_gap = 0.0,
-                                 int* rim_count = nullptr) {
+                                 int* rim_count = nullptr, const std::vector<int>& ends = {}, int* end_count = nullptr) {
   const int n = static_cast<int>(g.area.size());
   std::vector<double> dist(n, kInf);
   label->assign(n, -1);
@@ -328,6 +332,11 @@ std::vector<int> farthest_points(const Graph& g, int k, std::vector<int>* label,
       if (rim && (*rim)[u]) far_rim.push({d, u});
     });
   };
+  // Ends first (a crease's ends, where one-sided fits would otherwise extrapolate), each
+  // unless a seed lies within half the rim's gap (a crease as a strip of faces has two ends).
+  for (int v : ends)
+    if (static_cast<int>(seeds.size()) < k && !(dist[v] <= 0.5 * rim_gap)) seed(v);
+  if (end_count) *end_count = static_cast<int>(seeds.size());
   for (int scan_rim = 0; rim && static_cast<int>(seeds.size()) < k;) {
     while (scan_rim < n && !((*rim)[scan_rim] && (*label)[scan_rim] < 0)) ++scan_rim;
     int s = -1;
@@ -374,9 +383,11 @@ void voronoi(const Graph& g, const std::vector<int>& seeds, std::vector<int>* la
 }
 
 // One Lloyd step: each seed moves to the vertex of its region nearest the region's centroid;
-// the first `rim_seeds` seeds to the nearest of its region's rim vertices (if it has any).
+// the first `rim_seeds` seeds to the nearest of its region's rim vertices (if it has any), but
+// the first `fixed` stay.
 void lloyd_step(const Mesh& m, const Graph& g, const std::vector<int>& label, double quantum,
-                std::vector<int>* seeds, const std::vector<std::uint8_t>* rim = nullptr, int rim_seeds = 0) {
+                std::vector<int>* seeds, const std::vector<std::uint8_t>* rim = nullptr, int rim_seeds = 0,
+                int fixed = 0) {
   const int k = static_cast<int>(seeds->size());
   std::vector<Vec3> c(k, Vec3::Zero());
   std::vector<double> w(k, 0.0), best(k, kInf);
@@ -387,7 +398,7 @@ void lloyd_step(const Mesh& m, const Graph& g, const std::vector<int>& label, do
   for (int i = 0; i < k; ++i) c[i] /= w[i];
   for (int v = 0; v < static_cast<int>(label.size()); ++v) {
     const int i = label[v];
-    if (i < rim_seeds && !(*rim)[v]) continue;
+    if (i < fixed || (i < rim_seeds && !(*rim)[v])) continue;
     const double d = std::round((m.v[v] - c[i]).norm() / quantum);  // ties as in graph_of
     if (d < best[i]) best[i] = d, (*seeds)[i] = v;
   }
@@ -451,6 +462,53 @@ double barycentric(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c, s
   *w = {1.0 - u - v, u, v};
   const Vec3 q = a + u * e1 + v * e2;
   return (p - q).norm();
+}
+
+// The sides each cell lies on: those of the faces around the dense vertices within `radius`
+// (graph distance) of its seed. A crease modelled as a narrow strip of faces (a fold across a
+// row of triangles is two creases a fraction of a millimetre apart) is then one hinge whose
+// couples count on both outer sides. *vertex_side gets the side of each vertex off the creases.
+std::vector<std::pair<int, int>> cell_sides(const Graph& g, const std::vector<Face>& faces, const Creases& creases,
+                                            const std::vector<int>& seeds, double radius,
+                                            std::vector<int>* vertex_side) {
+  const int n = static_cast<int>(g.area.size());
+  std::vector<std::pair<int, int>> vs;  // (vertex, side of a face around it)
+  for (std::size_t i = 0; i < faces.size(); ++i)
+    for (int v : faces[i]) vs.push_back({v, creases.face_side[i]});
+  std::sort(vs.begin(), vs.end());
+  vs.erase(std::unique(vs.begin(), vs.end()), vs.end());
+  std::vector<int> off, idx;
+  csr(n, vs, &off, &idx);
+  vertex_side->assign(n, -1);
+  for (int v = 0; v < n; ++v)
+    if (off[v] < off[v + 1]) (*vertex_side)[v] = idx[off[v]];
+  std::vector<std::pair<int, int>> out;
+  std::vector<double> dist(n, kInf);
+  std::vector<int> touched;
+  for (int c = 0; c < static_cast<int>(seeds.size()); ++c) {
+    MinHeap heap;
+    dist[seeds[c]] = 0.0;
+    touched.assign(1, seeds[c]);
+    heap.push({0.0, seeds[c]});
+    while (!heap.empty()) {
+      const MinEntry e = heap.top();
+      heap.pop();
+      if (e.d != dist[e.v]) continue;
+      for (int q = off[e.v]; q < off[e.v + 1]; ++q) out.push_back({c, idx[q]});
+      for (int j = g.off[e.v]; j < g.off[e.v + 1]; ++j) {
+        const int u = g.nbr[j];
+        const double nd = e.d + g.len[j];
+        if (nd > radius || !(nd < dist[u])) continue;
+        if (dist[u] == kInf) touched.push_back(u);
+        dist[u] = nd;
+        heap.push({nd, u});
+      }
+    }
+    for (int v : touched) dist[v] = kInf;
+  }
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
 }
 
 }  // namespace
@@ -559,11 +617,21 @@ SurfaceCells::SurfaceCells(const SurfVerts& V, const SurfFaces& F, const CellOpt
   // Rim seeds until no rim vertex lies farther than 0.6 spacings from one: farthest points on a
   // line halve their gaps, and at 0.5 a straight edge's gaps of exactly one spacing were
   // halved again (64 of a 20 cm sheet's 74 couples on its rim).
-  const std::vector<std::uint8_t>* rim = opt.rim_seeds ? &dense_boundary : nullptr;
+  // Creases are seeded as the rim is: a point near a crease is embedded from its own side's
+  // couples (docs/lattice.md, "Creases"), which must reach the crease, not stop short of it.
+  const Creases creases = opt.crease_angle > 0.0 ? find_creases(m.v, m.f, opt.crease_angle) : Creases{};
+  std::vector<std::uint8_t> seed_first;
+  if (creases.edges > 0) {
+    seed_first.assign(n_dense_, 0);
+    for (int v = 0; v < n_dense_; ++v) seed_first[v] = (opt.rim_seeds && dense_boundary[v]) || creases.vertex[v];
+  }
+  const std::vector<std::uint8_t>* rim =
+      creases.edges > 0 ? &seed_first : opt.rim_seeds ? &dense_boundary : nullptr;
   int rim_seeds = 0;
-  std::vector<int> seeds = farthest_points(g, k, &label, rim, 0.6 * h_, &rim_seeds);
+  int end_seeds = 0;
+  std::vector<int> seeds = farthest_points(g, k, &label, rim, 0.6 * h_, &rim_seeds, creases.ends, &end_seeds);
   for (int it = 0; it < opt.lloyd_iters; ++it) {
-    lloyd_step(m, g, label, 1e-9 * h_ / opt.refine, &seeds, rim, rim_seeds);
+    lloyd_step(m, g, label, 1e-9 * h_ / opt.refine, &seeds, rim, rim_seeds, end_seeds);
     voronoi(g, seeds, &label);
   }
   const int nc = static_cast<int>(seeds.size());
@@ -611,6 +679,11 @@ SurfaceCells::SurfaceCells(const SurfVerts& V, const SurfFaces& F, const CellOpt
     nrm_[i] = len > 0.0 ? Vec3(nsum[i] / len) : Vec3(0.0, 0.0, 1.0);
   }
   tree_ = KdTree3(pos_);
+  if (creases.sides > 0) {
+    std::vector<int> vertex_side;
+    const auto sides = cell_sides(g, m.f, creases, seeds, kCreaseReach * h_, &vertex_side);
+    set_sides(m.v, m.f, creases, vertex_side, sides);
+  }
 
   // Input vertex -> the cell triangle around its cell that contains it, else its own cell.
   vcell_.resize(V.rows());
@@ -633,6 +706,45 @@ SurfaceCells::SurfaceCells(const SurfVerts& V, const SurfFaces& F, const CellOpt
       }
     }
   }
+}
+
+void SurfaceCells::set_sides(const std::vector<Vec3>& dense, const std::vector<Face>& faces, const Creases& creases,
+                             const std::vector<int>& vertex_side, const std::vector<std::pair<int, int>>& cell_sides) {
+  sides_ = creases.sides;
+  csr(size(), cell_sides, &side_off_, &side_idx_);
+  std::vector<Vec3> vertex_normal(dense.size(), Vec3::Zero());
+  for (const Face& f : faces) {
+    const Vec3 an = (dense[f[1]] - dense[f[0]]).cross(dense[f[2]] - dense[f[0]]);
+    for (int v : f) vertex_normal[v] += an;
+  }
+  std::vector<Vec3> off_crease;
+  for (std::size_t v = 0; v < dense.size(); ++v)
+    if (!creases.vertex[v] && !creases.sliver[v] && vertex_side[v] >= 0) {
+      off_crease.push_back(dense[v]);
+      side_vertex_.push_back(vertex_side[v]);
+      side_normal_.push_back(vertex_normal[v].normalized());
+    }
+  side_tree_ = KdTree3(off_crease);
+  std::vector<Vec3> on_crease;
+  for (std::size_t v = 0; v < dense.size(); ++v)
+    if (creases.vertex[v]) on_crease.push_back(dense[v]);
+  const KdTree3 crease_tree(on_crease);
+  crease_dist_.resize(size());
+  for (int c = 0; c < size(); ++c) crease_dist_[c] = (pos_[c] - on_crease[crease_tree.nearest(pos_[c])]).norm();
+}
+
+int SurfaceCells::side_of(const Eigen::Vector3d& p, Eigen::Vector3d* normal) const {
+  if (sides_ == 0 || side_vertex_.empty()) return -1;
+  const int v = side_tree_.nearest(p);
+  if (normal) *normal = side_normal_[v];
+  return side_vertex_[v];
+}
+
+bool SurfaceCells::on_side(int c, int s) const {
+  if (sides_ == 0 || side_off_[c] == side_off_[c + 1]) return true;
+  for (int q = side_off_[c]; q < side_off_[c + 1]; ++q)
+    if (side_idx_[q] == s) return true;
+  return false;
 }
 
 }  // namespace thinburn

@@ -12,11 +12,14 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
 
 namespace thinburn {
+
+struct Creases;
 
 using SurfVerts = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
 using SurfFaces = Eigen::Matrix<int, Eigen::Dynamic, 3, Eigen::RowMajor>;
@@ -36,6 +39,10 @@ struct CellOptions {
   /// Seed the mesh's boundary first, about a spacing apart along it, and keep those cells'
   /// positions on it while relaxing (a lattice's rim couples; the fire's cells do not).
   bool rim_seeds = false;
+  /// > 0: edges where the surface turns by more than this (rad) are creases (cpp/creases.hpp):
+  /// they are seeded first as the rim is, and each cell knows the sides of the creases it lies
+  /// on (a lattice's couples; docs/lattice.md, "Creases"). 0: no creases.
+  double crease_angle = 0.0;
 };
 
 /// @brief Nearest-point queries on a fixed 3-D point set: a k-d tree, O(log n) per query.
@@ -96,8 +103,24 @@ class SurfaceCells {
   int nearest(const Eigen::Vector3d& p) const { return tree_.nearest(p); }
   /// @brief Number of vertices of the refined (dense) mesh the cells were sampled from.
   int dense_size() const { return n_dense_; }
+  /// @brief Number of sides the creases cut the surface into (0: none, or crease_angle 0).
+  int crease_sides() const { return sides_; }
+  /// @brief The side point p lies on: that of the nearest dense vertex off the creases (-1
+  /// without creases); *normal (if given) gets that vertex's unit normal.
+  int side_of(const Eigen::Vector3d& p, Eigen::Vector3d* normal = nullptr) const;
+  /// @brief Whether cell c lies on side s: a cell on a crease lies on each side it touches.
+  bool on_side(int c, int s) const;
+  /// @brief The sides cell c lies on: side_index()[side_offset()[c] .. side_offset()[c+1]).
+  const std::vector<int>& side_offset() const { return side_off_; }
+  const std::vector<int>& side_index() const { return side_idx_; }
+  /// @brief Per cell, its distance (m) from the nearest crease vertex (empty without creases).
+  const std::vector<double>& crease_distance() const { return crease_dist_; }
 
  private:
+  void set_sides(const std::vector<Eigen::Vector3d>& dense, const std::vector<std::array<int, 3>>& faces,
+                 const Creases& creases,
+                 const std::vector<int>& vertex_side, const std::vector<std::pair<int, int>>& cell_sides);
+
   double h_ = 0.0, area_total_ = 0.0;
   int n_dense_ = 0;
   std::vector<Eigen::Vector3d> pos_, nrm_;
@@ -108,6 +131,12 @@ class SurfaceCells {
   std::vector<std::array<int, 3>> vcell_;
   std::vector<std::array<double, 3>> vweight_;
   KdTree3 tree_;
+  int sides_ = 0;
+  std::vector<int> side_off_, side_idx_;  // per cell, the sides of the faces near it
+  KdTree3 side_tree_;                     // the dense vertices off the creases ...
+  std::vector<int> side_vertex_;          // ... and their sides
+  std::vector<Eigen::Vector3d> side_normal_;  // ... and normals
+  std::vector<double> crease_dist_;
 };
 
 }  // namespace thinburn

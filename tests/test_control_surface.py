@@ -7,7 +7,8 @@ import pytest
 
 from thinburn import _surface_shapes as S
 from thinburn.control_surface import SPRING_KINDS, ControlSurface
-from thinburn.scenes import rect_sheet
+from thinburn._mesh_measures import EdgeStrain
+from thinburn.scenes import folded_sheet, rect_sheet
 
 
 def _rotation(a=0.7, b=1.1):
@@ -115,6 +116,42 @@ def test_a_bent_lattice_bends_a_fine_mesh_smoothly():
     angle, _ = _dihedral(P, f)
     assert angle.max() < 8.1
     assert np.abs(P - roll(v)).max() < 0.0041
+
+
+@pytest.mark.parametrize("turn", [30.0, 90.0, 150.0])
+def test_a_lattice_turned_about_a_crease_turns_each_side_rigidly(turn):
+    # A 20 cm sheet folded across its middle by `turn` degrees (150: back over itself). Edges
+    # turning by more than 25 degrees are a crease (docs/lattice.md, "Creases"): couples sit
+    # along it, its two ends included, and each side is embedded from its own couples and the
+    # crease's. Turning one side's couples about the fold (the crease's by half) then turns that
+    # side's points rigidly: measured edge strain at most 6e-14 and positions within 4e-16 m of the
+    # exact fold. One window across the fold (before creases) gave up to 13.9 % and 0.85 mm.
+    V, F = folded_sheet(0.2, 0.2, angle=turn, nx=41, ny=41)
+    cs = ControlSurface(V, F, 0.03, 0.0075)
+    e = cs.embed(V)
+    mid = cs.rest.mean(axis=1)
+    on_fold = np.hypot(mid[:, 1] - 0.1, mid[:, 2]) < 1e-12
+    assert np.isclose(mid[on_fold, 0].min(), 0.0) and np.isclose(mid[on_fold, 0].max(), 0.2)
+    assert np.diff(np.sort(mid[on_fold, 0])).max() <= 1.2 * 0.03 + 1e-9  # no fold point 0.6 spacings from one
+    np.testing.assert_array_equal(cs.deform(e, cs.rest), V)
+    assert np.abs(e.offset).max() < 1e-12
+
+    def turned(X, a):  # turn points about the fold line (y = 0.1, z = 0, along x) by a
+        Y = X.copy()
+        dy, dz = X[..., 1] - 0.1, X[..., 2]
+        Y[..., 1], Y[..., 2] = 0.1 + np.cos(a) * dy - np.sin(a) * dz, np.sin(a) * dy + np.cos(a) * dz
+        return Y
+
+    for a in np.radians([-20.0, 20.0, 60.0]):
+        x = cs.rest.copy()
+        up = ~on_fold & (mid[:, 2] > 1e-12)
+        x[up] = turned(cs.rest[up], a)
+        x[on_fold] = turned(cs.rest[on_fold], a / 2)
+        P = cs.deform(e, x)
+        want = V.copy()
+        want[V[:, 2] > 1e-12] = turned(V[V[:, 2] > 1e-12], a)
+        assert np.abs(P - want).max() < 1e-14
+        assert EdgeStrain(V, F)(P).max() < 1e-12
 
 
 def test_a_spacing_too_coarse_for_the_shell_names_the_lattice():
