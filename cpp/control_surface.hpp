@@ -10,7 +10,10 @@
 /// paper's grid lattice is the special case of a flat sheet (grid_topology, FfdLattice::embed);
 /// this class serves every other shell: tubes, spheres, folds, pieces.
 ///
-/// Embedding. A point x gets weights over the couples within R of it (3 rings of its nearest
+/// Creases (edges turning past 25 degrees, cpp/creases.hpp) are hinges: couples sit along them
+/// and a point is embedded from the couples of its own side of them and those on them.
+///
+/// Embedding. A point x gets weights over the couples within R of it (4 rings of its nearest
 /// couple on the control surface, so the far side of a fold or another piece never counts):
 /// moving least squares, linear in 3-D (with a ridge on the normal term, which leaves the
 /// tangent-plane MLS where the couples are flat), with Wendland C2 window functions. The
