@@ -4,7 +4,8 @@
 Scenes (issue #11): ``lantern`` (an open cylinder, r = 0.1 m, 0.3 m tall, standing on a table,
 lit on its side), ``sphere`` (a UV sphere, r = 0.1 m, lit on its equator), ``letter`` (a sheet
 folded at 30 degrees), ``stack`` (three flat sheets 4 mm apart in one object, lit at a
-corner), ``a4`` (the flat A4 sheet on a table) and ``curtain`` (a pleated curtain, 1 m x 1.4 m,
+corner), ``a4`` (the flat A4 sheet on a table), ``box`` (Blender's cube, 10 cm, subdivided 20 x
+20 a face, on the table, lit at the middle of a bottom edge) and ``curtain`` (a pleated curtain, 1 m x 1.4 m,
 81 x 113 vertices, pleats y = 2 cm sin(2 pi x / 20 cm) in its geometry, Shade Smooth, its hem
 5 cm above the table, its top row the Pin Group, Burns Like Curtain, Climb 0.4, lit at the
 middle of its hem; ``--wind S`` adds a Wind field of Strength S blowing through it, ``--flame``
@@ -102,6 +103,21 @@ def build(scene_name: str, args):
         probes = {"lit": lit, "top_sheet_corner": (-0.08, -0.08, 0.008),
                   "far": (0.1, 0.1, 0.0)}
         cam = ((0.3, -0.4, 0.35), (0.0, 0.0, 0.0))
+    elif scene_name == "box":
+        # A paper box as an artist makes one: Blender's cube, 10 cm, subdivided (Edit Mode >
+        # Subdivide, 19 cuts: 20 x 20 quads a face), resting on the table. Its 12 edges are
+        # creases of the lattice's embedding (docs/lattice.md, "Creases").
+        bpy.ops.mesh.primitive_cube_add(size=0.1, location=(0.0, 0.0, 0.05))
+        sheet = bpy.context.active_object
+        sheet.name = "Box"
+        bpy.ops.object.mode_set(mode="EDIT")
+        bpy.ops.mesh.select_all(action="SELECT")
+        bpy.ops.mesh.subdivide(number_cuts=19)
+        bpy.ops.object.mode_set(mode="OBJECT")
+        lit = (0.0, -0.05, 0.0)
+        probes = {"lit": lit, "front_top": (0.0, -0.05, 0.1), "top": (0.0, 0.0, 0.1),
+                  "back": (0.0, 0.05, 0.05)}
+        cam = ((0.3, -0.35, 0.3), (0.0, 0.0, 0.04))
     elif scene_name == "a4":
         sheet = H.make_rect("Sheet", 0.21, 0.297, 43, 61)  # A4, lying on the table
         lit = (-0.105, -0.1485, 0.0)
@@ -227,7 +243,7 @@ def measure_curtain(sheet, rest, world, ignite) -> dict:
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--scene", default="lantern", choices=["lantern", "sphere", "letter", "stack", "a4", "curtain"])
+    ap.add_argument("--scene", default="lantern", choices=["lantern", "sphere", "letter", "stack", "a4", "box", "curtain"])
     ap.add_argument("--out", type=Path, default=ROOT / "docs" / "images")
     ap.add_argument("--width", type=int, default=480)
     ap.add_argument("--samples", type=int, default=16)
