@@ -1,0 +1,48 @@
+"""Fabric piles over a spread of starts (docs/lattice.md, "folds"; README "Known limitations").
+
+A square fabric of `size` stands upright on the floor (its bottom edge `z0` above it), is let go
+and collapses into a pile: 4 s at 1/24 s, cells=128, the core's default lattice (or
+`--lattice M`). A pile is chaotic, so one drop says little: six drops from bottom edges 0, 2,
+... 10 mm apart (z0 = 5.0 .. 6.0 cm). Per size and fabric: the 99th percentile of |l/L - 1| over
+all mesh edges at 4 s for each drop and their median, the lowest lattice couple centre (mm; below
+0 the mesh is clamped to the floor there), and the pile's height.
+Run: python scripts/pile_ensemble.py [--sizes 0.2 0.4] [--materials cloth silk] [--lattice M]
+"""
+import argparse
+import time
+
+import numpy as np
+
+import thinburn
+from thinburn._mesh_measures import EdgeStrain
+from thinburn.scenes import rect_sheet
+
+
+def drop(size, material, z0, lattice=None):
+    n = 41 if size <= 0.2 else 61
+    v, f = rect_sheet(size, size, nx=n, ny=n, vertical=True, z=z0)
+    sim = thinburn.Simulation(v, f, material=material, cells=128, floor=0.0, lattice=lattice)
+    sim.run(4.0, dt=1 / 24)
+    x = sim.vertex_positions()
+    centre = sim.lattice_positions().reshape(-1, 2, 3).mean(axis=1)
+    return 100 * np.percentile(EdgeStrain(v, f)(x), 99), 1000 * centre[:, 2].min(), x[:, 2].max(), sim.lattice_couples
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--sizes", type=float, nargs="+", default=[0.2, 0.4])
+    ap.add_argument("--materials", nargs="+", default=["cloth", "silk"])
+    ap.add_argument("--lattice", type=int, default=None)
+    a = ap.parse_args()
+    for size in a.sizes:
+        for material in a.materials:
+            t0 = time.perf_counter()
+            r = np.array([drop(size, material, 0.05 + 0.002 * k, a.lattice) for k in range(6)])
+            print(f"{100 * size:.0f} cm {material:6s} {int(r[0, 3])} couples: p99 % "
+                  + " ".join(f"{p:5.2f}" for p in r[:, 0]) + f" | median {np.median(r[:, 0]):5.2f} | "
+                  f"lowest centre {np.median(r[:, 1]):6.2f} mm (median) | height {np.median(r[:, 2]):.3f} m | "
+                  f"{time.perf_counter() - t0:.0f} s", flush=True)
+
+
+if __name__ == "__main__":
+    main()
