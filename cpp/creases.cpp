@@ -103,6 +103,7 @@ Creases find_creases(const std::vector<Eigen::Vector3d>& v, const std::vector<st
     ++crease_degree[e.a], ++crease_degree[e.b];
     ++out.edges;
   }
+  if (out.edges == 0) return Creases{std::vector<std::uint8_t>(v.size(), 0)};  // every crease was a sliver's
   std::vector<std::uint8_t> boundary(v.size(), 0);
   for (const auto& [key, count] : faces_of_edge)
     if (count == 1) boundary[key >> 32] = boundary[key & 0xffffffffu] = 1;
