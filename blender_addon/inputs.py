@@ -510,7 +510,7 @@ def group_igniters(objs) -> list:
 
 # The settings a group bakes with come from the sheet it was baked from; these, when another
 # sheet of the group has them otherwise, are not used for it (the report says so).
-GROUP_SHARED = ("material", "cells", "crumple", "frame_start", "frame_end", "lattice",
+GROUP_SHARED = ("material", "cells", "crumple", "frame_start", "frame_end", "lattice", "crease_angle",
                 "integrator", "seed", "front", "burn_duration", "floor_mode", "floor_height",
                 "floor_object", "wind_scale", "threads")
 

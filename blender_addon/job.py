@@ -7,6 +7,7 @@ the main thread; the worker (worker.py) never sees bpy.
 from __future__ import annotations
 
 import inspect
+import math
 import queue
 import time as _time
 
@@ -332,6 +333,9 @@ class BakeJob:
         if self.shell:
             kwargs["integrator"] = settings.integrator
             kwargs["lattice"] = settings.lattice or None
+            if "crease_angle" in properties.PARAM_FIELDS["simulation"]:  # older cores have no creases
+                # Blender keeps the angle in float32: 180° reads as 180.000005
+                kwargs["crease_angle"] = min(180.0, math.degrees(settings.crease_angle))
             self.dynamics = inputs.dynamics(self.scene, settings)
             kwargs.update(self.dynamics)
         if any(o.thinburn.pin_group for o in objs):

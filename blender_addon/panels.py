@@ -43,6 +43,9 @@ class PHYSICS_PT_thinburn(ThinBurnPhysicsPanel, bpy.types.Panel):
         row = col.row()
         row.active = settings.crumple and job.core_supports("lattice")
         row.prop(settings, "lattice")
+        row = col.row()
+        row.active = settings.crumple
+        row.prop(settings, "crease_angle")
         layout.prop(settings, "crumple")
         row = layout.row()
         row.active = settings.crumple

@@ -4,6 +4,8 @@ Only properties that the bake reads frame by frame are animatable (igniter stren
 and transform, the wind scale); the rest are read once at the bake's first frame and are
 not offered for keyframing, so the UI never suggests an animation the bake would ignore.
 """
+import math
+
 import bpy
 import thinburn
 from thinburn.params import FIELDS as PARAM_FIELDS
@@ -164,6 +166,13 @@ class ThinBurnSettings(bpy.types.PropertyGroup):
                     "this many couples per side (the paper's M; on a curved shell about as many "
                     "squared over its surface); 0 chooses it from the sheet's size and the Fire "
                     "Detail")
+    crease_angle: FloatProperty(
+        name="Crease Angle", subtype="ANGLE", options=STATIC, min=0.0, max=math.pi,
+        default=math.radians(PARAM_FIELDS["simulation"]["crease_angle"].default),
+        description="On a curved shell (a folded letter, a box), edges whose faces turn by more "
+                    "than this are creases: hinges its motion keeps sharp, each side moving on its "
+                    "own. 180°: none. A low-poly tube (12 sides: 30° at each edge) is a prism at "
+                    "the default; raise it to keep such a tube round")
     crumple: BoolProperty(
         name="Crumple", default=True, options=STATIC,
         description="Simulate the sheet's motion (paper §4: heat, bending, gravity, wind, fire "

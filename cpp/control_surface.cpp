@@ -21,10 +21,6 @@ constexpr int kS = SurfaceEmbedding::kStencil;
 // Ridge on the MLS's normal term, per unit window: couples spread across the normal by more
 // than about sqrt(kNormalRidge) R make the weights reproduce linear fields in 3-D.
 constexpr double kNormalRidge = 1e-4;
-// Edges where the shell turns by more than this are creases (hinges; docs/lattice.md,
-// "Creases"). Blender shades edges sharper than 30 degrees flat by default; a cylinder of 8
-// sides (45 degrees) is a prism of creases, one of 12 (30 degrees) still a smooth tube.
-constexpr double kCreaseAngle = 25.0 * 3.14159265358979323846 / 180.0;
 
 // Wendland's C2 window: 1 at q = 0, 0 with zero first and second derivatives at q = 1.
 double wendland(double q) {
@@ -39,17 +35,20 @@ Eigen::Vector3d axis(const RowMatX3& x, int c) { return (x.row(2 * c + 1) - x.ro
 }  // namespace
 
 ControlSurface::ControlSurface(const SurfVerts& vertices, const SurfFaces& faces, double spacing,
-                               double thickness)
+                               double thickness, double crease_angle)
     : thickness_(thickness) {
   if (!(spacing > 0) || !std::isfinite(spacing)) throw std::invalid_argument("lattice: the couples' spacing must be > 0");
   if (!(thickness > 0) || !std::isfinite(thickness)) throw std::invalid_argument("lattice_thickness must be > 0");
+  if (!(crease_angle >= 0 && crease_angle <= 180))
+    throw std::invalid_argument("crease_angle must be within [0, 180] degrees");
   CellOptions opt;
   opt.spacing = spacing;
   // Couples on the rim: a mesh point beyond the outermost couples was extrapolated from them,
   // and the lever turned their twist into stretch (a pleated curtain's side edge in wind:
   // single edges 2.3x; docs/lattice.md, "Rim couples").
   opt.rim_seeds = true;
-  opt.crease_angle = kCreaseAngle;
+  // A crease_angle of 180 (or more than any edge turns) leaves the shell without creases.
+  opt.crease_angle = crease_angle < 180 ? crease_angle * 3.14159265358979323846 / 180.0 : 0.0;
   coarse_ = std::make_shared<const SurfaceCells>(vertices, faces, opt);
   const int C = coarse_->size();
   if (C < 3)

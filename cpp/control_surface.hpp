@@ -34,6 +34,11 @@
 
 namespace thinburn {
 
+/// Mesh edges whose faces turn by more than this many degrees are creases (docs/lattice.md,
+/// "Creases"). Blender shades edges sharper than 30 degrees flat by default; a cylinder of 8
+/// sides (45 degrees) is a prism of creases, one of 15 (24 degrees) still a smooth tube.
+constexpr double kDefaultCreaseAngle = 25.0;
+
 /// @brief Points embedded in a control surface's lattice.
 struct SurfaceEmbedding {
   static constexpr int kStencil = 24;  ///< couples per point (unused slots: weight 0)
@@ -49,10 +54,12 @@ struct SurfaceEmbedding {
 class ControlSurface {
  public:
   /// @brief The control surface of the mesh at `spacing` (m) between couples; the layer is
-  /// `thickness` thick (m, > 0). Throws std::invalid_argument naming `vertices`/`faces` for a
+  /// `thickness` thick (m, > 0); edges turning by more than `crease_angle` degrees are creases
+  /// (180: none). Throws std::invalid_argument naming `vertices`/`faces` for a
   /// mesh SurfaceCells refuses, or `lattice` when the spacing leaves fewer than 3 couples on a
   /// piece or a couple without neighbours.
-  ControlSurface(const SurfVerts& vertices, const SurfFaces& faces, double spacing, double thickness);
+  ControlSurface(const SurfVerts& vertices, const SurfFaces& faces, double spacing, double thickness,
+                 double crease_angle = kDefaultCreaseAngle);
 
   int couples() const { return coarse_->size(); }
   double spacing() const { return coarse_->spacing(); }

@@ -62,6 +62,8 @@ const std::vector<param::Field<ShellParams>>& ShellParams::fields() {
   static const std::vector<Field<P>> table = {
       field("lattice", &P::lattice, at_least(0), "M couples per side (0: chosen from the sheet and its cells)"),
       field("lattice_thickness", &P::lattice_thickness, at_least(0), "m between a couple's two vertices (0: chosen)"),
+      field("crease_angle", &P::crease_angle, within(0, 180),
+            "degrees: a curved shell's mesh edges turning by more are creases, hinges (180: none)"),
       field("has_floor", &P::has_floor, "a horizontal floor under the sheet"),
       field("floor_z", &P::floor_z, "m: the floor's height"),
       field("ash_strength", &P::ash_strength, within(0, 1), "share of the springs' stiffness burnt sheet keeps"),
@@ -143,7 +145,7 @@ Shell::Shell(const SurfaceCells& cells, const RowMatX3& vertices, const RowMatX3
   constexpr int kFinerTries = 6;
   for (int attempt = 0;; ++attempt) {
     try {
-      control_ = std::make_unique<ControlSurface>(vertices, faces, spacing, thickness_);
+      control_ = std::make_unique<ControlSurface>(vertices, faces, spacing, thickness_, params_.crease_angle);
       break;
     } catch (const std::invalid_argument& e) {
       if (params_.lattice > 0 || attempt == kFinerTries || std::string(e.what()).rfind("lattice", 0) != 0) throw;
@@ -162,7 +164,7 @@ Shell::Shell(const SurfaceCells& cells, const RowMatX3& vertices, const RowMatX3
     if (!(kappa * spacing > 1.15 * kMaxTurn) || spacing <= coarsest / kMaxRefine * 1.0001) break;
     spacing = std::max(kMaxTurn / kappa, coarsest / kMaxRefine);
     thickness_ = params_.lattice_thickness > 0 ? params_.lattice_thickness : default_thickness(spacing);
-    control_ = std::make_unique<ControlSurface>(vertices, faces, spacing, thickness_);
+    control_ = std::make_unique<ControlSurface>(vertices, faces, spacing, thickness_, params_.crease_angle);
   }
   // And it carries the mesh in its layer: finer while the mesh's detail (pleats, waves) lies
   // farther from the control surface than half the layer's thickness at more than 1 % of its
@@ -179,7 +181,7 @@ Shell::Shell(const SurfaceCells& cells, const RowMatX3& vertices, const RowMatX3
       break;
     spacing = std::max(kFitStep * spacing, coarsest / kMaxFitRefine);
     thickness_ = params_.lattice_thickness > 0 ? params_.lattice_thickness : default_thickness(spacing);
-    control_ = std::make_unique<ControlSurface>(vertices, faces, spacing, thickness_);
+    control_ = std::make_unique<ControlSurface>(vertices, faces, spacing, thickness_, params_.crease_angle);
   }
   lattice_ = std::make_unique<FfdLattice>(FfdLattice::on_surface(control_->couples(), control_->rest()));
   RowMatX3 centres(cells.size(), 3);

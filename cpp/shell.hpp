@@ -38,6 +38,8 @@ constexpr double kDefaultImperfection = 1e-3;
 struct ShellParams {
   int lattice = 0;               ///< M couples per side; 0 chooses from the sheet's size and N
   double lattice_thickness = 0;  ///< m between a couple's two vertices; 0 chooses
+  /// Degrees: a curved shell's mesh edges turning by more are creases (180: none).
+  double crease_angle = kDefaultCreaseAngle;
   bool has_floor = false;
   double floor_z = 0.0;
   double ash_strength = 0.1;     ///< share of the springs' stiffness burnt sheet keeps

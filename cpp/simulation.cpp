@@ -87,6 +87,8 @@ const std::vector<param::Field<SimulationParams>>& SimulationParams::fields() {
       field("lattice", &P::lattice, within(0, kMaxLattice), "M couples per side (0: chosen)",
             "a step's cost grows as M^2"),
       field("lattice_thickness", &P::lattice_thickness, at_least(0), "m between a couple's two vertices (0: chosen)"),
+      field("crease_angle", &P::crease_angle, within(0, 180),
+            "degrees: a curved shell's mesh edges turning by more are creases, hinges (180: none)"),
       field("has_floor", &P::has_floor, "a horizontal floor (a table) under the sheet"),
       field("floor_z", &P::floor_z, "m: the floor's height"),
       field("mesh_tolerance", &P::mesh_tolerance, within(0, 1),
@@ -376,6 +378,7 @@ ShellParams Simulation::shell_params() const {
   ShellParams sp;
   sp.lattice = params_.lattice;
   sp.lattice_thickness = params_.lattice_thickness;
+  sp.crease_angle = params_.crease_angle;
   sp.has_floor = params_.has_floor;
   sp.floor_z = params_.floor_z;
   sp.ash_strength = params_.ash_strength;

@@ -67,6 +67,7 @@ struct SimulationParams {
   bool shell = true;
   int lattice = 0;               ///< M couples per side; 0 chooses from the sheet's size and N
   double lattice_thickness = 0;  ///< m between a couple's two vertices; 0 chooses
+  double crease_angle = kDefaultCreaseAngle;  ///< ShellParams::crease_angle
   bool has_floor = false;        ///< a horizontal floor (a table) under the sheet
   double floor_z = 0.0;          ///< m, its height
   /// Share of the sheet's size a couple drifts before the mesh vertices it carries are redone;

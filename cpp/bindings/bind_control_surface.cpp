@@ -33,11 +33,12 @@ void define_control_surface(py::module_& m) {
       .def("__len__", [](const SurfaceEmbedding& e) { return e.size(); });
 
   py::class_<ControlSurface>(m, "ControlSurface", "Couples on a coarse surface fitted to a shell.")
-      .def(py::init([](const SurfVerts& v, const SurfFaces& f, double spacing, double thickness) {
+      .def(py::init([](const SurfVerts& v, const SurfFaces& f, double spacing, double thickness, double crease_angle) {
              py::gil_scoped_release release;
-             return new ControlSurface(v, f, spacing, thickness);
+             return new ControlSurface(v, f, spacing, thickness, crease_angle);
            }),
-           py::arg("vertices"), py::arg("faces"), py::arg("spacing"), py::arg("thickness"))
+           py::arg("vertices"), py::arg("faces"), py::arg("spacing"), py::arg("thickness"),
+           py::arg("crease_angle") = kDefaultCreaseAngle)
       .def_property_readonly("couples", &ControlSurface::couples)
       .def_property_readonly("spacing", &ControlSurface::spacing)
       .def_property_readonly("thickness", &ControlSurface::thickness)
