@@ -47,10 +47,8 @@ def main():
             for k in range(24 * a.seconds):
                 sim.step(1 / 24)
                 if k % 240 == 239:
-                    r = measure(sim.vertex_positions())
-                    ch = sim.vertex_char()
-                    unburnt = (ch[E[:, 0]] == 0) & (ch[E[:, 1]] == 0)
-                    out.append(f"{100 * np.percentile(r[unburnt], 99):5.2f} ({100 * np.percentile(r[unburnt & near], 99):5.2f})")
+                    out.append(f"{100 * np.percentile(measure.unburnt(sim), 99):5.2f} "
+                               f"({100 * np.percentile(measure.unburnt(sim, near), 99):5.2f})")
             print(f"turn {turn:5.1f}  {fold:5s}  {sim.lattice_couples:3d} couples  unburnt p99 % (within 1 cm of "
                   "the fold): " + "  ".join(out), flush=True)
 

@@ -54,7 +54,6 @@ def main():
         if name not in a.scenes:
             continue
         measure = EdgeStrain(V, F)
-        E = measure.edges
         for setting in a.settings:
             extra = SETTINGS[setting]
             sim = thinburn.Simulation(V, F, cells=a.cells, **kw, **extra)
@@ -63,10 +62,7 @@ def main():
             for k in range(24 * a.seconds):
                 sim.step(1 / 24)
                 if k % 240 == 239:
-                    r = measure(sim.vertex_positions())
-                    ch = sim.vertex_char()
-                    unburnt = (ch[E[:, 0]] == 0) & (ch[E[:, 1]] == 0)
-                    out.append(f"{100 * np.percentile(r[unburnt], 99):5.2f} %")
+                    out.append(f"{100 * np.percentile(measure.unburnt(sim), 99):5.2f} %")
             print(f"{name:8s} {setting:9s} {sim.geometry:7s} {sim.lattice_couples:4d} couples  unburnt p99: "
                   + "  ".join(out), flush=True)
 

@@ -24,6 +24,15 @@ class EdgeStrain:
     def __call__(self, x):
         return np.abs(self.lengths(x) / self.rest_length - 1.0)
 
+    def unburnt(self, sim, mask=None):
+        """|l / L - 1| of a Simulation's mesh now over the edges whose two vertices are both
+        unburnt (char 0), and also in `mask` (per edge) if given."""
+        char = sim.vertex_char()
+        keep = (char[self.edges[:, 0]] == 0) & (char[self.edges[:, 1]] == 0)
+        if mask is not None:
+            keep &= mask
+        return self(sim.vertex_positions())[keep]
+
 
 def face_adjacency(faces):
     """Pairs of faces sharing an edge."""
