@@ -112,6 +112,12 @@ def _on_burnt(self, context):
     materials.sync_burnt(self.id_data)
 
 
+def _crease_angle_default():
+    """The core's crease_angle in radians; 180° (no creases) for a core from before them."""
+    field = PARAM_FIELDS["simulation"].get("crease_angle")
+    return math.radians(field.default) if field is not None else math.pi
+
+
 def _field_props():
     props = {}
     default = thinburn.MATERIALS["paper"]
@@ -168,7 +174,7 @@ class ThinBurnSettings(bpy.types.PropertyGroup):
                     "Detail")
     crease_angle: FloatProperty(
         name="Crease Angle", subtype="ANGLE", options=STATIC, min=0.0, max=math.pi,
-        default=math.radians(PARAM_FIELDS["simulation"]["crease_angle"].default),
+        default=_crease_angle_default(),
         description="On a curved shell (a folded letter, a box), edges whose faces turn by more "
                     "than this are creases: hinges its motion keeps sharp, each side moving on its "
                     "own. 180°: none. A low-poly tube (12 sides: 30° at each edge) is a prism at "

@@ -240,7 +240,8 @@ def test_the_python_key_lists_are_the_tables_names():
     assert simulation.PARTICLE_KEYS + ("seed",) == tuple(_core.ParticleSystem().params)
     assert set(simulation._PARAM_BOUNDS) == {
         "cv", "v_floor", "speed_noise", "duration_noise", "climb", "wind_spread", "max_drive",
-        "ash_fraction", "ash_strength", "ignition_gain", "heat_loss", "mesh_tolerance", "imperfection"}
+        "ash_fraction", "ash_strength", "ignition_gain", "heat_loss", "mesh_tolerance", "imperfection",
+        "crease_angle"}
     assert simulation._PARAM_BOUNDS["ignition_gain"] == dict(low=0.0, high=None, low_open=True, high_open=False)
     assert simulation.MAX_LATTICE == 129
     assert set(simulation.INTEGRATORS) == set(FIELDS["dynamics"]["integrator"].choices)
