@@ -465,9 +465,10 @@ double barycentric(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c, s
 }
 
 // The sides each cell lies on: those of the faces around the dense vertices within `radius`
-// (graph distance) of its seed. A crease modelled as a narrow strip of faces (a fold across a
-// row of triangles is two creases a fraction of a millimetre apart) is then one hinge whose
-// couples count on both outer sides. *vertex_side gets the side of each vertex off the creases.
+// (graph distance) of its seed. A cell seeded on a crease lies on both its sides, and so does
+// one within a hair of it (a fold across a row of triangles leaves its seeds 0.86 mm from the
+// line that stays a crease once the strip joined a side). *vertex_side gets the side of each
+// vertex (one of them for a vertex on a crease).
 std::vector<std::pair<int, int>> cell_sides(const Graph& g, const std::vector<Face>& faces, const Creases& creases,
                                             const std::vector<int>& seeds, double radius,
                                             std::vector<int>* vertex_side) {
