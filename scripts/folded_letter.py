@@ -8,6 +8,11 @@ wide turned by half the angle at each side. Per scene at 10, 20, 30 and 40 s (ce
 the 99th percentile of |l/L - 1| over edges whose vertices are both unburnt, over all of them and
 over those within 1 cm of the fold.
 Run: python scripts/folded_letter.py [--turns 30 90 150] [--folds line strip] [--seconds 40]
+
+--crossings: instead, the demo's letter (thinburn.scenes.folded_sheet, folded across its middle
+on a row of vertices) folded nearly shut (--turns, default 160 170 175), on its table, lit at a
+corner of the lying half, cells=64: in how many frames a mesh edge passes through a triangle of
+the sheet (ipctk.has_intersections), and the first few.
 """
 import argparse
 
@@ -27,14 +32,36 @@ def letter(turn, columns):
     return v, f
 
 
+def crossings(turns, seconds):
+    import ipctk
+    from thinburn._mesh_measures import mesh_edges
+    from thinburn.scenes import A4, folded_sheet
+
+    for turn in turns:
+        V, F = folded_sheet(A4[0], A4[1], angle=turn, nx=43, ny=61)
+        mesh = ipctk.CollisionMesh(np.asfortranarray(V), np.asfortranarray(mesh_edges(F).astype(np.int32)),
+                                   np.asfortranarray(F.astype(np.int32)))
+        sim = thinburn.Simulation(V, F, cells=64, floor=0.0)
+        sim.ignite((0.004, 0.004, 0.0))
+        crossed = []
+        for k in range(24 * seconds):
+            sim.step(1 / 24)
+            if ipctk.has_intersections(mesh, np.asfortranarray(sim.vertex_positions())):
+                crossed.append(k + 1)
+        print(f"turn {turn:5.1f}: {len(crossed)} of {24 * seconds} frames cross, first {crossed[:3]}", flush=True)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--turns", type=float, nargs="+", default=[30.0, 90.0, 150.0])
+    ap.add_argument("--turns", type=float, nargs="+", default=None)
     ap.add_argument("--folds", nargs="+", default=["line", "strip"], choices=["line", "strip"])
     ap.add_argument("--seconds", type=int, default=40)
     ap.add_argument("--cells", type=int, default=96)
+    ap.add_argument("--crossings", action="store_true")
     a = ap.parse_args()
-    for turn in a.turns:
+    if a.crossings:
+        return crossings(a.turns or [160.0, 170.0, 175.0], a.seconds)
+    for turn in a.turns or [30.0, 90.0, 150.0]:
         for fold in a.folds:
             V, F = letter(turn, 65 if fold == "line" else 64)
             measure = EdgeStrain(V, F)
