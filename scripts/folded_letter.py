@@ -8,6 +8,7 @@ wide turned by half the angle at each side. Per scene at 10, 20, 30 and 40 s (ce
 the 99th percentile of |l/L - 1| over edges whose vertices are both unburnt, over all of them and
 over those within 1 cm of the fold.
 Run: python scripts/folded_letter.py [--turns 30 90 150] [--folds line strip] [--seconds 40]
+    [--crease-angle 25]
 
 --crossings: instead, the demo's letter (thinburn.scenes.folded_sheet, folded across its middle
 on a row of vertices) folded nearly shut (--turns, default 160 170 175), on its table, lit at a
@@ -58,6 +59,7 @@ def main():
     ap.add_argument("--seconds", type=int, default=40)
     ap.add_argument("--cells", type=int, default=96)
     ap.add_argument("--crossings", action="store_true")
+    ap.add_argument("--crease-angle", type=float, default=25.0, help="Simulation's crease_angle, degrees")
     a = ap.parse_args()
     if a.crossings:
         return crossings(a.turns or [160.0, 170.0, 175.0], a.seconds)
@@ -68,7 +70,7 @@ def main():
             E = measure.edges
             mid = 0.5 * (V[E[:, 0]] + V[E[:, 1]])
             near = np.hypot(mid[:, 0] - 0.105, mid[:, 2]) < 0.01
-            sim = thinburn.Simulation(V, F, cells=a.cells, floor=0.0)
+            sim = thinburn.Simulation(V, F, cells=a.cells, floor=0.0, crease_angle=a.crease_angle)
             sim.ignite((0.0, 0.0, 0.0))
             out = []
             for k in range(24 * a.seconds):
