@@ -34,8 +34,10 @@ std::vector<int> join_slivers(const std::vector<std::array<int, 3>>& f, const st
     for (int v : t) nv = std::max(nv, v + 1);
   on.assign(nv, 0);
   for (const CreaseEdge& e : creases) on[e.a] = on[e.b] = 1;
+  std::vector<int> root(nf);  // each face's side before the joins
   for (int i = 0; i < nf; ++i) {
-    auto [it, fresh] = all_on_crease.try_emplace(find_root(parent, i), true);
+    root[i] = find_root(parent, i);
+    auto [it, fresh] = all_on_crease.try_emplace(root[i], true);
     for (int v : f[i]) it->second = it->second && on[v];
   }
   std::unordered_map<int, bool> joined;
@@ -48,12 +50,11 @@ std::vector<int> join_slivers(const std::vector<std::array<int, 3>>& f, const st
     joined[s] = true;
     parent[s] = s == rf ? rg : rf;
   }
-  std::vector<int> out;  // the joined slivers' faces
-  for (int i = 0; i < nf; ++i) {
-    int r = i;
-    while (parent[r] != r && !joined[r]) r = parent[r];
-    if (joined[r]) out.push_back(i);
-  }
+  // The joined slivers' faces, by their sides before the joins: the finds above compress the
+  // paths past a joined sliver's root (walking up from a face found 2 of a 178-face strip).
+  std::vector<int> out;
+  for (int i = 0; i < nf; ++i)
+    if (joined[root[i]]) out.push_back(i);
   return out;
 }
 
@@ -103,7 +104,11 @@ Creases find_creases(const std::vector<Eigen::Vector3d>& v, const std::vector<st
     ++crease_degree[e.a], ++crease_degree[e.b];
     ++out.edges;
   }
-  if (out.edges == 0) return Creases{std::vector<std::uint8_t>(v.size(), 0)};  // every crease was a sliver's
+  if (out.edges == 0) {  // every crease was a sliver's
+    Creases none;
+    none.vertex.assign(v.size(), 0);
+    return none;
+  }
   std::vector<std::uint8_t> boundary(v.size(), 0);
   for (const auto& [key, count] : faces_of_edge)
     if (count == 1) boundary[key >> 32] = boundary[key & 0xffffffffu] = 1;
