@@ -5,9 +5,13 @@
 #include <stdexcept>
 #include <utility>
 
+#include "threads.hpp"
+
 namespace thinburn {
 
 namespace {
+
+constexpr long kBlendCost = 24;  // one point's blend (4 couples' displacements), in threads.hpp units
 
 Eigen::Vector3d centre(const RowMatX3& x, int c) { return 0.5 * (x.row(2 * c) + x.row(2 * c + 1)).transpose(); }
 
@@ -61,12 +65,13 @@ void FoldBlend::apply(const FfdLattice& lattice, double z_min, Eigen::Ref<RowMat
   if (!any_) return;
   const RowMatX3& x = lattice.positions();
   const RowMatX3& rest = lattice.rest();
-  for (Eigen::Index p = 0; p < tri_.size(); ++p) {
+  // Each point writes its own row only: the same bits on any number of threads.
+  parallel_for(0, static_cast<long>(tri_.size()), kBlendCost, [&](long p) {
     const std::int32_t* cp = tri_.couple.data() + 4 * p;
     const double* wt = tri_.weight.data() + 4 * p;
     double w = 0.0;
     for (int k = 0; k < 4; ++k) w += wt[k] * weight_[cp[k]];
-    if (!(w > 0.0)) continue;
+    if (!(w > 0.0)) return;
     // The trilinear point: rest plus the interpolated displacement, as FfdLattice::deform.
     const double r = tri_.r(p);
     Eigen::RowVector3d q = tri_.rest.row(p);
@@ -76,7 +81,7 @@ void FoldBlend::apply(const FfdLattice& lattice, double z_min, Eigen::Ref<RowMat
     }
     out.row(p) += w * (q - out.row(p));
     out(p, 2) = std::max(out(p, 2), z_min);
-  }
+  });
 }
 
 }  // namespace thinburn
