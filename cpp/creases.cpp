@@ -24,15 +24,11 @@ struct CreaseEdge {
 // its neighbours, so the fold is one crease line, and a side's couples turn about it: two
 // lines that close would each claim the hinge, and the strip's edges across them would stretch
 // by half the turn's change (32 % on a folded letter's strip at 40 s).
-std::vector<int> join_slivers(const std::vector<std::array<int, 3>>& f, const std::vector<CreaseEdge>& creases,
-                              std::vector<int>& parent) {
+std::vector<int> join_slivers(std::size_t vertices, const std::vector<std::array<int, 3>>& f,
+                              const std::vector<CreaseEdge>& creases, std::vector<int>& parent) {
   const int nf = static_cast<int>(f.size());
   std::unordered_map<int, bool> all_on_crease;  // root -> every vertex of its faces on a crease
-  std::vector<std::uint8_t> on(0);
-  int nv = 0;
-  for (const auto& t : f)
-    for (int v : t) nv = std::max(nv, v + 1);
-  on.assign(nv, 0);
+  std::vector<std::uint8_t> on(vertices, 0);
   for (const CreaseEdge& e : creases) on[e.a] = on[e.b] = 1;
   std::vector<int> root(nf);  // each face's side before the joins
   for (int i = 0; i < nf; ++i) {
@@ -95,7 +91,7 @@ Creases find_creases(const std::vector<Eigen::Vector3d>& v, const std::vector<st
   // off its new side's surface, where the embedding would carry it at an offset along the turning
   // normal (its edges 10 % at 40 s), while the fits of the two sides meet within 0.1 mm.
   out.sliver.assign(v.size(), 0);
-  for (int i : join_slivers(f, creases, parent))
+  for (int i : join_slivers(v.size(), f, creases, parent))
     for (int k : f[i]) out.sliver[k] = 1;
   std::vector<int> crease_degree(v.size(), 0);
   for (const CreaseEdge& e : creases) {
@@ -104,10 +100,9 @@ Creases find_creases(const std::vector<Eigen::Vector3d>& v, const std::vector<st
     ++crease_degree[e.a], ++crease_degree[e.b];
     ++out.edges;
   }
-  if (out.edges == 0) {  // every crease was a sliver's
-    Creases none;
-    none.vertex.assign(v.size(), 0);
-    return none;
+  if (out.edges == 0) {  // every crease was a sliver's: none left
+    out.sliver.clear();
+    return out;
   }
   std::vector<std::uint8_t> boundary(v.size(), 0);
   for (const auto& [key, count] : faces_of_edge)

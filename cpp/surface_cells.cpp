@@ -726,12 +726,6 @@ void SurfaceCells::set_sides(const std::vector<Vec3>& dense, const std::vector<F
       side_normal_.push_back(vertex_normal[v].normalized());
     }
   side_tree_ = KdTree3(off_crease);
-  std::vector<Vec3> on_crease;
-  for (std::size_t v = 0; v < dense.size(); ++v)
-    if (creases.vertex[v]) on_crease.push_back(dense[v]);
-  const KdTree3 crease_tree(on_crease);
-  crease_dist_.resize(size());
-  for (int c = 0; c < size(); ++c) crease_dist_[c] = (pos_[c] - on_crease[crease_tree.nearest(pos_[c])]).norm();
 }
 
 int SurfaceCells::side_of(const Eigen::Vector3d& p, Eigen::Vector3d* normal) const {

@@ -103,18 +103,11 @@ class SurfaceCells {
   int nearest(const Eigen::Vector3d& p) const { return tree_.nearest(p); }
   /// @brief Number of vertices of the refined (dense) mesh the cells were sampled from.
   int dense_size() const { return n_dense_; }
-  /// @brief Number of sides the creases cut the surface into (0: none, or crease_angle 0).
-  int crease_sides() const { return sides_; }
   /// @brief The side point p lies on: that of the nearest dense vertex off the creases (-1
   /// without creases); *normal (if given) gets that vertex's unit normal.
   int side_of(const Eigen::Vector3d& p, Eigen::Vector3d* normal = nullptr) const;
   /// @brief Whether cell c lies on side s: a cell on a crease lies on each side it touches.
   bool on_side(int c, int s) const;
-  /// @brief The sides cell c lies on: side_index()[side_offset()[c] .. side_offset()[c+1]).
-  const std::vector<int>& side_offset() const { return side_off_; }
-  const std::vector<int>& side_index() const { return side_idx_; }
-  /// @brief Per cell, its distance (m) from the nearest crease vertex (empty without creases).
-  const std::vector<double>& crease_distance() const { return crease_dist_; }
 
  private:
   void set_sides(const std::vector<Eigen::Vector3d>& dense, const std::vector<std::array<int, 3>>& faces,
@@ -131,12 +124,11 @@ class SurfaceCells {
   std::vector<std::array<int, 3>> vcell_;
   std::vector<std::array<double, 3>> vweight_;
   KdTree3 tree_;
-  int sides_ = 0;
+  int sides_ = 0;                        // the sides the creases cut the surface into (0: none)
   std::vector<int> side_off_, side_idx_;  // per cell, the sides of the faces near it
   KdTree3 side_tree_;                     // the dense vertices off the creases ...
   std::vector<int> side_vertex_;          // ... and their sides
   std::vector<Eigen::Vector3d> side_normal_;  // ... and normals
-  std::vector<double> crease_dist_;
 };
 
 }  // namespace thinburn

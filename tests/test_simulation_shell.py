@@ -95,7 +95,8 @@ def test_a_fabric_collapsing_into_a_pile_keeps_its_edge_lengths(material, measur
 
 def test_a_folding_fabric_is_the_same_on_one_and_two_threads():
     # The fold blend's pass over the mesh runs in parallel: each point writes its own row, so
-    # a cloth folding past 40 degrees between couples (the blend whole) gives the same bits.
+    # a cloth folding past 40 degrees between couples (the blend whole; measured 107 by 3 s)
+    # gives the same bits.
     v, f = rect_sheet(0.2, 0.2, nx=41, ny=41, vertical=True, z=0.05)
     runs = []
     for threads in (1, 2):

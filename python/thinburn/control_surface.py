@@ -25,21 +25,21 @@ class ControlSurface:
     """Couples on a coarse control surface fitted to a triangle mesh.
 
     spacing: metres between neighbouring couples (> 0); thickness: metres between a couple's
-    bottom and top control vertices (> 0); crease_angle: degrees, mesh edges whose faces turn
-    by more are creases, hinges the embedding does not smooth across (180: none;
+    bottom and top control vertices (> 0); crease_angle: degrees (None: the core's 25), mesh
+    edges whose faces turn by more are creases, hinges the embedding does not smooth across (180: none;
     docs/lattice.md, "Creases"). A mesh SurfaceCells refuses (non-manifold edges,
     zero area) raises ValueError naming ``faces`` or ``vertices``; a spacing that leaves a
     piece with fewer than 3 couples, or a couple with no neighbour, names ``lattice``.
     """
 
-    def __init__(self, vertices, faces, spacing: float, thickness: float, crease_angle: float = 25.0):
+    def __init__(self, vertices, faces, spacing: float, thickness: float, crease_angle: float | None = None):
         v = real_array(vertices, "vertices", (-1, 3))
         if v.shape[0] < 3:
             raise ValueError(f"vertices must have at least 3 rows, got {v.shape[0]}")
         f = index_array(faces, "faces", (-1, 3), v.shape[0])
+        creases = {} if crease_angle is None else {"crease_angle": real(crease_angle, "crease_angle", low=0.0, high=180.0)}
         self._c = _core.ControlSurface(v, f.astype(np.int32), real(spacing, "spacing", low=0.0, low_open=True),
-                                       real(thickness, "thickness", low=0.0, low_open=True),
-                                       real(crease_angle, "crease_angle", low=0.0, high=180.0))
+                                       real(thickness, "thickness", low=0.0, low_open=True), **creases)
 
     couples = property(lambda self: self._c.couples, doc="Number of couples.")
     spacing = property(lambda self: self._c.spacing, doc="Target spacing between couples, m.")
