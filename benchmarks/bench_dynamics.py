@@ -4,7 +4,7 @@ convergence orders of the integrators against theory. Prints and writes JSON.
 
     python -m benchmarks.bench_dynamics [--sizes 8 16 32 64] [--frames 12] [--threads 1]
                                      [--out bench_dynamics.json] [--no-theory] [--wake-hold 12]
-                                     [--ldlt-max-vertices N]
+                                     [--ldlt-max-vertices N] [--preconditioner auto|ldlt|jacobi]
 """
 from __future__ import annotations
 
@@ -26,7 +26,8 @@ SIDE, THICKNESS, DENSITY, DT = 0.3, 0.002, 0.08, 1 / 24
 
 
 def hot_spot_run(M: int, sleeping: bool, frames: int, integrator: str = "implicit",
-                 wake_hold: int = 12, ldlt_max_vertices: int | None = None) -> dict:
+                 wake_hold: int = 12, ldlt_max_vertices: int | None = None,
+                 preconditioner: str = "auto") -> dict:
     """A SIDE x SIDE paper sheet on a table; from frame 3 one couple at the centre turns by
     0.02 rad per frame (a small hot spot). Times the steps after the sheet settled."""
     lat = _core.FfdLattice(M, flat_rest(M, SIDE, SIDE, THICKNESS, (-SIDE / 2, -SIDE / 2, 0.0)))
@@ -35,6 +36,7 @@ def hot_spot_run(M: int, sleeping: bool, frames: int, integrator: str = "implici
     dyn = _core.LatticeDynamics(lat, sleeping=sleeping, has_floor=True, floor_z=-THICKNESS / 2,
                                 integrator=integrator, wake_hold=wake_hold, bimetal=False,
                                 crumple_momentum=False, max_stretch=0.25,
+                                preconditioner=getattr(_core.Preconditioner, preconditioner.capitalize()),
                                 **({} if ldlt_max_vertices is None
                                    else dict(ldlt_max_vertices=ldlt_max_vertices)))
     dyn.set_masses(vertex_masses(M, SIDE * SIDE, DENSITY))
@@ -42,7 +44,7 @@ def hot_spot_run(M: int, sleeping: bool, frames: int, integrator: str = "implici
     centre = (M // 2) * M + M // 2
     for _ in range(2):  # settle under gravity
         dyn.step(DT, D, heat)
-    times, awake, cg, subs = [], [], [], []
+    times, awake, cg, subs, ldlt = [], [], [], [], []
     for f in range(frames):
         D[centre] = 0.02 * (f + 1)
         t0 = time.perf_counter()
@@ -51,10 +53,12 @@ def hot_spot_run(M: int, sleeping: bool, frames: int, integrator: str = "implici
         awake.append(st.awake)
         cg.append(st.cg_iterations)
         subs.append(st.substeps)
+        ldlt.append(st.ldlt_solves)
     return dict(M=M, sleeping=sleeping, integrator=integrator, vertices=2 * M * M,
                 ms_per_step=1e3 * float(np.mean(times)), ms_per_step_max=1e3 * float(np.max(times)),
                 mean_awake=float(np.mean(awake)), max_awake=int(np.max(awake)),
                 mean_cg_iterations=float(np.mean(cg)), mean_substeps=float(np.mean(subs)),
+                mean_ldlt_solves=float(np.mean(ldlt)),
                 max_displacement_m=float(np.abs(lat.positions - lat.rest).max()),
                 positions=lat.positions.copy())
 
@@ -128,18 +132,22 @@ def main() -> None:
     ap.add_argument("--wake-hold", type=int, default=12, help="LatticeDynamics wake_hold (steps)")
     ap.add_argument("--ldlt-max-vertices", type=int, default=None,
                     help="LatticeDynamics ldlt_max_vertices (default: the core's)")
+    ap.add_argument("--preconditioner", choices=("auto", "ldlt", "jacobi"), default="auto",
+                    help="LatticeDynamics preconditioner")
     args = ap.parse_args()
     thinburn.set_threads(args.threads)
     result = dict(machine=platform.processor() or platform.machine(), threads=args.threads,
                   frames=args.frames, dt=DT, side_m=SIDE, hot_spot=[])
-    print(f"hot spot on a {SIDE} m sheet, {args.frames} frames of 1/24 s, {args.threads} thread(s)")
+    print(f"hot spot on a {SIDE} m sheet, {args.frames} frames of 1/24 s, {args.threads} thread(s), "
+          f"preconditioner {args.preconditioner} (LDLT: solves a step the factor preconditioned)")
     print(f"{'M':>4} {'sleep':>6} {'ms/step':>9} {'max ms':>8} {'awake':>8} {'of':>6} "
-          f"{'cg it':>7} {'sub':>5} {'max |x-rest|':>13} {'|dx| vs no-sleep':>17}")
+          f"{'cg it':>7} {'sub':>5} {'LDLT':>5} {'max |x-rest|':>13} {'|dx| vs no-sleep':>17}")
     for M in args.sizes:
         ref = None
         for sleeping in (False, True):
             r = hot_spot_run(M, sleeping, args.frames, wake_hold=args.wake_hold,
-                             ldlt_max_vertices=args.ldlt_max_vertices)
+                             ldlt_max_vertices=args.ldlt_max_vertices,
+                             preconditioner=args.preconditioner)
             pos = r.pop("positions")
             if ref is None:
                 ref = pos
@@ -147,7 +155,7 @@ def main() -> None:
             result["hot_spot"].append(r)
             print(f"{M:>4} {str(sleeping):>6} {r['ms_per_step']:>9.2f} {r['ms_per_step_max']:>8.2f} "
                   f"{r['mean_awake']:>8.0f} {r['vertices']:>6} {r['mean_cg_iterations']:>7.0f} "
-                  f"{r['mean_substeps']:>5.1f} {r['max_displacement_m']:>13.2e} "
+                  f"{r['mean_substeps']:>5.1f} {r['mean_ldlt_solves']:>5.2f} {r['max_displacement_m']:>13.2e} "
                   f"{r['max_diff_vs_no_sleep_m']:>17.2e}")
     if not args.no_theory:
         st = stability()

@@ -923,6 +923,7 @@ StepStats LatticeDynamics::step(double dt, const Eigen::VectorXd& D, const Eigen
   }
   if (bimetal) bimetal_all_ = false;
   st.factorizations = solver_.factorizations();
+  st.ldlt_solves = solver_.ldlt_solves();
   D_prev_ = D;
   if (p_.sleeping) sleep_.update_sleep(vel_, accel_, free);
   sleep_.end_step();

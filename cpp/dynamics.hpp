@@ -37,7 +37,7 @@ inline bool is_implicit(Integrator i) { return i == Integrator::Implicit || i ==
 
 /// @brief Preconditioner of the implicit integrator's conjugate gradients.
 enum class Preconditioner {
-  Auto,   ///< Ldlt up to ldlt_max_vertices awake vertices, Jacobi above
+  Auto,   ///< Ldlt up to ldlt_max_vertices awake vertices; above, the one that measurably costs less
   Ldlt,   ///< a sparse block LDL^T factorization of the system (block_ldlt.hpp), kept until it goes stale
   Jacobi  ///< couple-block Jacobi (each couple's 6 x 6 block inverted), rebuilt every substep
 };
@@ -98,7 +98,7 @@ struct DynamicsParams {
   double cg_velocity_tolerance = 1e-7;  ///< m/s: absolute floor of the CG stopping test
   int cg_max_iterations = 2000;
   Preconditioner preconditioner = Preconditioner::Auto;
-  int ldlt_max_vertices = 2500;    ///< Auto: the largest awake set given the Ldlt preconditioner
+  int ldlt_max_vertices = 2500;    ///< Auto: the largest awake set given Ldlt without measuring
   int refactor_iterations = 100;   ///< Ldlt: a solve taking more iterations refactors for the next one (a ceiling: the rent rule refactors sooner)
 
   /// @brief The table of these fields (param_table.hpp): names, bounds, docs.
@@ -130,6 +130,7 @@ struct StepStats {
   int awake = 0;          ///< vertices integrated
   int cg_iterations = 0;  ///< conjugate-gradient iterations, all substeps and passes
   int factorizations = 0; ///< block LDL^T factorizations (Ldlt preconditioner), all substeps and passes
+  int ldlt_solves = 0;    ///< linear solves the block LDL^T factor preconditioned (the rest: Jacobi)
   double omega_max = 0;   ///< rad/s, bound on the largest frequency of the awake lattice
   int passes = 0;         ///< integrations of the step (> 1 when it woke sleepers and redid it)
   double max_strain = 0;  ///< largest |l / L - 1| of an awake vertex's springs at the step's end

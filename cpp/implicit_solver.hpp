@@ -78,11 +78,28 @@ class ImplicitSolver {
   Eigen::Vector3d constraint_impulse(double h, int a);
   /// @brief Block LDL^T factorizations since reset_count.
   int factorizations() const { return factorizations_; }
-  void reset_count() { factorizations_ = 0; }
+  /// @brief Solves preconditioned by the factor since reset_count.
+  int ldlt_solves() const { return ldlt_solves_; }
+  void reset_count() { factorizations_ = ldlt_solves_ = 0; }
 
  private:
   struct Factor;
+  // Auto above ldlt_max_vertices: Jacobi for kTrial[0] solves, then the factor for kTrial[1]
+  // (enough to spread a factorization over), then the one whose solves cost fewer
+  // multiply-adds; the other is tried again after `retrial` solves, twice as long after each
+  // try that confirms the pick.
+  struct Choice {
+    static constexpr int kTrial[2] = {4, 24}, kRetrial = 240, kMaxRetrial = 7680;
+    bool ldlt = false;                 // the one in use
+    bool trying = false;               // ... on trial against the pick
+    double per_solve[2] = {-1, -1};    // measured work per solve: [0] Jacobi, [1] LDL^T; -1 unknown
+    int since_measured[2] = {0, 0};    // solves since each was last measured
+    int retrial = kRetrial;
+    double sum = 0.0;                  // the pick's work over its current run
+    int run = 0;                       // solves in that run
+  };
   bool use_ldlt() const;
+  void account(bool ldlt, int iterations, bool factorized);
   void refresh_factor(double h);
   void charge_rent(int iterations);
   void build_jacobi(double h);
@@ -98,6 +115,8 @@ class ImplicitSolver {
   std::vector<double> work_;        // CG and Jacobian buffers, reused
   std::unique_ptr<Factor> factor_;
   int factorizations_ = 0;          // since reset_count
+  int ldlt_solves_ = 0;             // since reset_count
+  Choice choice_;
   bool precond_ldlt_ = false;       // the solve in progress uses factor_
 };
 

@@ -53,6 +53,7 @@ void define_dynamics(py::module_& m) {
       .def_readonly("awake", &StepStats::awake, "Vertices integrated.")
       .def_readonly("cg_iterations", &StepStats::cg_iterations)
       .def_readonly("factorizations", &StepStats::factorizations, "Block LDL^T factorizations (Ldlt preconditioner).")
+      .def_readonly("ldlt_solves", &StepStats::ldlt_solves, "Linear solves the LDL^T factor preconditioned (the rest: Jacobi).")
       .def_readonly("omega_max", &StepStats::omega_max, "rad/s, bound on the largest frequency.")
       .def_readonly("max_strain", &StepStats::max_strain, "Largest |l/L - 1| of an awake vertex's springs at the end.")
       .def_readonly("stretch_redos", &StepStats::stretch_redos, "Integrations redone with more substeps for an overstretched spring.")

@@ -232,6 +232,7 @@ void define_simulation(py::module_& m) {
         return py::dict(py::arg("substeps") = t.substeps, py::arg("awake") = t.awake,
                         py::arg("cg_iterations") = t.cg_iterations, py::arg("omega_max") = t.omega_max,
                         py::arg("passes") = t.passes, py::arg("factorizations") = t.factorizations,
+                        py::arg("ldlt_solves") = t.ldlt_solves,
                         py::arg("max_strain") = t.max_strain, py::arg("stretch_redos") = t.stretch_redos,
                         py::arg("strain_limited") = t.strain_limited,
                         py::arg("sample_contacts") = t.sample_contacts);

@@ -148,8 +148,9 @@ class Simulation:
           ``cg_tolerance``, ``cg_velocity_tolerance``, ``cg_max_iterations``, ``gravity``,
           ``preconditioner`` of the implicit solve's conjugate gradients ("auto", the default:
           a sparse block LDL^T factorization, kept while it stays good, up to
-          ``ldlt_max_vertices`` (2500) awake lattice vertices, couple-block Jacobi above;
-          "ldlt"; "jacobi"), ``refactor_iterations``, ``wake_hold`` (steps a vertex woken
+          ``ldlt_max_vertices`` (2500) awake lattice vertices; above, whichever of it and
+          couple-block Jacobi measurably costs fewer multiply-adds a solve; "ldlt"; "jacobi";
+          ``step_stats()["ldlt_solves"]`` says which ran), ``refactor_iterations``, ``wake_hold`` (steps a vertex woken
           again soon after falling asleep stays awake, doubling per repeat);
         * the particles, prefixed ``particle_``: ``particle_capacity``,
           ``particle_birth_rate``, ``particle_temperature0``, ``particle_cooling``,
