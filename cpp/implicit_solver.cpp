@@ -332,67 +332,107 @@ void ImplicitSolver::charge_rent(int iterations) {
   if (iterations > s_.p.refactor_iterations || f.rent >= f.ldlt.factor_work()) f.stale = true;
 }
 
-int ImplicitSolver::solve(double h) {
+void ImplicitSolver::prepare_preconditioner(double h) {
   Buffers B = buffers();
-  const int na = static_cast<int>(s_.active.size());
-  const bool ldlt = use_ldlt();
-  const int factored_before = factorizations_;
-  if (ldlt) refresh_factor(h);
-  precond_ldlt_ = ldlt && factor_->valid;
+  precond_ldlt_ = use_ldlt() && factor_->valid;
   if (!precond_ldlt_) {
     build_jacobi(h);
-  } else {
-    // Vertices outside the factored set are preconditioned by their diagonal block.
-    for (int a = 0; a < na; ++a)
-      if (factor_->slot[s_.active[a]] < 0) mat3(B.pinv, 2 * a) = mat3(B.diag, a).inverse();
+    return;
   }
-  const int N = 3 * na;
-  auto axpy = [&](double alpha, const double* xv, double* y) {  // y += alpha x
-    parallel_for(0, N, kAxpyCost, [&](long i) { y[i] += alpha * xv[i]; });
-  };
+  // Vertices outside the factored set are preconditioned by their diagonal block.
+  const int na = static_cast<int>(s_.active.size());
+  for (int a = 0; a < na; ++a)
+    if (factor_->slot[s_.active[a]] < 0) mat3(B.pinv, 2 * a) = mat3(B.diag, a).inverse();
+}
+
+int ImplicitSolver::rent_budget() const {
+  // Iterations the kept factor may still take in this solve before the excess over a fresh
+  // factor's iterations costs as much as a factorization: rent or buy applied within the solve,
+  // so that one bad solve (a factor of another awake set: up to 1107 iterations a solve on the
+  // pleated curtain) is bounded too, not only the sum over solves.
+  const Factor& f = *factor_;
+  if (!precond_ldlt_ || f.fresh_iterations < 0) return s_.p.cg_max_iterations;
+  const double left = std::max(0.0, f.ldlt.factor_work() - f.rent) / f.iteration_work;
+  return static_cast<int>(std::min<double>(s_.p.cg_max_iterations, f.fresh_iterations + std::ceil(left)));
+}
+
+int ImplicitSolver::cg(double h, double ref, double floor_abs, int max_iterations, bool& converged) {
   // Modified PCG (Baraff and Witkin 1998) from the start value in B.dv: constrained DOFs start
   // at their prescribed value (v_z -> 0) and every search direction is filtered to leave them
   // there.
+  Buffers B = buffers();
+  const int na = static_cast<int>(s_.active.size()), N = 3 * na;
+  auto axpy = [&](double alpha, const double* xv, double* y) {  // y += alpha x
+    parallel_for(0, N, kAxpyCost, [&](long i) { y[i] += alpha * xv[i]; });
+  };
   apply_A(h, B.dv, B.Ap);
-  // b stays as assembled (constraint_impulse reads it); its filtered copy in z (free until the
-  // first preconditioning) sets the scale of the tolerance.
+  for (int i = 0; i < N; ++i) B.r[i] = B.b[i] - B.Ap[i];
+  for (int a = 0; a < na; ++a) s_.contacts.filter(s_.active[a], B.r + 3 * a);
+  const double tol = std::max(s_.p.cg_tolerance * ref, floor_abs);
+  converged = std::sqrt(det_dot(B.r, B.r, N, B.partial)) <= floor_abs;
+  if (converged) return 0;
+  int iterations = 0;
+  precondition(B.r, B.p);
+  double rz = det_dot(B.r, B.p, N, B.partial);
+  while (iterations < max_iterations) {
+    ++iterations;
+    apply_A(h, B.p, B.Ap);
+    for (int a = 0; a < na; ++a) s_.contacts.filter(s_.active[a], B.Ap + 3 * a);
+    const double pAp = det_dot(B.p, B.Ap, N, B.partial);
+    if (!(pAp > 0.0)) {
+      converged = true;  // nothing left to descend along (as good as this solve gets)
+      break;
+    }
+    const double alpha = rz / pAp;
+    axpy(alpha, B.p, B.dv);
+    axpy(-alpha, B.Ap, B.r);
+    if (std::sqrt(det_dot(B.r, B.r, N, B.partial)) <= tol) {
+      converged = true;
+      break;
+    }
+    precondition(B.r, B.z);
+    const double rz_new = det_dot(B.r, B.z, N, B.partial);
+    const double beta = rz_new / rz;
+    rz = rz_new;
+    parallel_for(0, N, kAxpyCost, [&](long i) { B.p[i] = B.z[i] + beta * B.p[i]; });
+  }
+  return iterations;
+}
+
+int ImplicitSolver::solve(double h) {
+  Buffers B = buffers();
+  const int na = static_cast<int>(s_.active.size()), N = 3 * na;
+  const int factored_before = factorizations_;
+  if (use_ldlt()) refresh_factor(h);
+  prepare_preconditioner(h);
+  // The tolerance's scale, fixed for the solve (a restart must not tighten it): the larger of
+  // the start residual and the filtered b.
+  apply_A(h, B.dv, B.Ap);
   for (int i = 0; i < N; ++i) B.r[i] = B.b[i] - B.Ap[i], B.z[i] = B.b[i];
   for (int a = 0; a < na; ++a) {
     s_.contacts.filter(s_.active[a], B.r + 3 * a);
     s_.contacts.filter(s_.active[a], B.z + 3 * a);
   }
-  int iterations = 0;
-  const double rnorm0 = std::sqrt(det_dot(B.r, B.r, N, B.partial));
-  const double ref = std::max(rnorm0, std::sqrt(det_dot(B.z, B.z, N, B.partial)));
+  const double ref = std::max(std::sqrt(det_dot(B.r, B.r, N, B.partial)), std::sqrt(det_dot(B.z, B.z, N, B.partial)));
   // Absolute floor: a residual below cg_velocity_tolerance times the mass norm changes the
   // velocities by less than about that (A >= M), whatever rounding-level right-hand side a
   // resting sheet has; without it such a sheet would iterate on rounding noise.
   double mass2 = 0.0;
   for (int v : s_.active) mass2 += 3.0 * s_.mass(v) * s_.mass(v);
   const double floor_abs = s_.p.cg_velocity_tolerance * std::sqrt(mass2);
-  if (rnorm0 > floor_abs) {
-    precondition(B.r, B.p);
-    double rz = det_dot(B.r, B.p, N, B.partial);
-    while (iterations < s_.p.cg_max_iterations) {
-      ++iterations;
-      apply_A(h, B.p, B.Ap);
-      for (int a = 0; a < na; ++a)
-        s_.contacts.filter(s_.active[a], B.Ap + 3 * a);
-      const double pAp = det_dot(B.p, B.Ap, N, B.partial);
-      if (!(pAp > 0.0)) break;
-      const double alpha = rz / pAp;
-      axpy(alpha, B.p, B.dv);
-      axpy(-alpha, B.Ap, B.r);
-      const double rn = std::sqrt(det_dot(B.r, B.r, N, B.partial));
-      if (rn <= s_.p.cg_tolerance * ref || rn <= floor_abs) break;
-      precondition(B.r, B.z);
-      const double rz_new = det_dot(B.r, B.z, N, B.partial);
-      const double beta = rz_new / rz;
-      rz = rz_new;
-      parallel_for(0, N, kAxpyCost, [&](long i) { B.p[i] = B.z[i] + beta * B.p[i]; });
-    }
+  bool converged = false;
+  int iterations = cg(h, ref, floor_abs, rent_budget(), converged);
+  int since_factor = iterations;
+  if (!converged && precond_ldlt_ && iterations < s_.p.cg_max_iterations) {
+    // The kept factor has cost a factorization's worth of extra iterations: buy a fresh one and
+    // go on from where the iterations got to.
+    factor_->stale = true;
+    refresh_factor(h);
+    prepare_preconditioner(h);
+    since_factor = cg(h, ref, floor_abs, s_.p.cg_max_iterations - iterations, converged);
+    iterations += since_factor;
   }
-  if (precond_ldlt_) charge_rent(iterations);
+  if (precond_ldlt_) charge_rent(since_factor);
   account(precond_ldlt_, iterations, factorizations_ > factored_before);
   return iterations;
 }

@@ -109,6 +109,13 @@ class ImplicitSolver {
   // (A in) at active slot a, h2 = h^2.
   Eigen::Vector3d row_of_A(double h2, int a, const double* in);
   void precondition(const double* in, double* out);
+  // Jacobi's blocks, or the factor (and the diagonal blocks of the vertices outside it).
+  void prepare_preconditioner(double h);
+  // Iterations the solve may take on a kept factor before refactoring pays.
+  int rent_budget() const;
+  // Conjugate gradients from buffers().dv until the residual is below max(cg_tolerance ref,
+  // floor_abs) (converged) or max_iterations ran; returns the iterations.
+  int cg(double h, double ref, double floor_abs, int max_iterations, bool& converged);
 
   View s_;
   std::size_t ns_ = 0, n_ = 0;      // springs and vertices the buffers are sized for

@@ -92,9 +92,20 @@ def test_auto_above_its_threshold_keeps_the_factor_where_it_pays():
 
 def test_auto_above_its_threshold_drops_the_factor_where_it_does_not():
     # At 1/24000 s steps the system is nearly the mass matrix: Jacobi converges in a couple of
-    # iterations and the factor's fill costs more than it saves. Auto used the factor for 21
-    # of 2416 solves (its first trial and two retrials) and ends 1.4e-11 m from forced Jacobi
-    # (bound 1e-10).
+    # iterations and the factor's fill costs more than it saves. Auto used the factor for 29
+    # of 2416 solves (its first trial and retrials) and ends 1.2e-10 m from forced Jacobi
+    # (bound 2e-10; the forced factor itself ends 1.6e-8 m from it, within the CG tolerance).
     r = _auto_against_forced(1 / 24000)
     assert r["auto1"][1] < 0.03 * r["ldlt"][1]
-    np.testing.assert_allclose(r["auto1"][0], r["jacobi"][0], rtol=0, atol=1e-10)
+    np.testing.assert_allclose(r["auto1"][0], r["jacobi"][0], rtol=0, atol=2e-10)
+
+
+def test_a_kept_factor_of_another_awake_set_costs_at_most_about_a_factorization(hanging_curtain):
+    # Rent or buy within a solve: a factor of another awake set is off from the system by a term
+    # of rank about 3 x the vertices that changed next to it, and CG pays about that many more
+    # iterations. Once a solve's extra iterations cost a factorization, it refactors there. With
+    # wake_hold=0 the curtain's awake set changes nearly every step: the most iterations of a
+    # step (up to 4 passes) measured 134, and 5529 in all; without the rule 748 and 24744.
+    _, counts = hanging_curtain(wake_hold=0)
+    assert counts["most_cg"] <= 150
+    assert counts["cg_iterations"] <= 6000
