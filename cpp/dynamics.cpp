@@ -17,7 +17,6 @@ namespace thinburn {
 namespace {
 
 constexpr int kMaxPasses = 4;
-constexpr int kRedoShare = 16;   // a step is redone when it stresses awake over 1/16 of its awake count
 constexpr int kMaxContactRounds = 8;  // solves per implicit substep while contacts are added
 void require(bool ok, const std::string& what) {
   if (!ok) throw std::invalid_argument(what);
@@ -311,14 +310,14 @@ void LatticeDynamics::set_params(const DynamicsParams& p) {
 }
 
 LatticeDynamics::Checkpoint LatticeDynamics::checkpoint() const {
-  return Checkpoint{mass_, strength_, sleep_.awake(), sleep_.hold(), sleep_.hold_len(), vel_, accel_, wind_, bimetal_.grad_dir(), bimetal_.grad_share(),
+  return Checkpoint{mass_, strength_, sleep_.state(), vel_, accel_, wind_, bimetal_.grad_dir(), bimetal_.grad_share(),
                     hist_x_, hist_v_, hist_stamp_, substep_count_, hist_h_, contacts_.collider_state()};
 }
 
 void LatticeDynamics::rollback(Checkpoint&& c) {
   mass_ = std::move(c.mass);
   strength_ = std::move(c.strength);
-  sleep_.restore(std::move(c.awake), std::move(c.hold), std::move(c.hold_len));
+  sleep_.restore(std::move(c.sleep));
   vel_ = std::move(c.vel);
   accel_ = std::move(c.accel);
   bimetal_.restore(std::move(c.grad_dir), std::move(c.grad_share));

@@ -198,8 +198,7 @@ class LatticeDynamics {
   /// step that throws restores itself: taken before a step that may throw, put back if it does.
   struct Checkpoint {
     Eigen::VectorXd mass, strength;
-    std::vector<std::uint8_t> awake;
-    std::vector<std::uint16_t> hold, hold_len;
+    Sleeping::State sleep;
     RowMatX3 vel, accel;
     Eigen::Vector3d wind;
     RowMatX3 grad_dir;

@@ -19,31 +19,24 @@ constexpr double kHeldMargin = 10.0;
 Sleeping::Sleeping(int n, const SpringIncidence& incidence, const std::vector<std::uint8_t>& pinned,
                    const DynamicsParams& p)
     : n_(n), inc_(incidence), pinned_(pinned), p_(p) {
-  awake_.assign(n_, 1);
+  st_.awake.assign(n_, 1);
   forced_.assign(n_, 0);
-  hold_.assign(n_, 0);
-  hold_len_.assign(n_, 0);
-  slept_at_.assign(n_, std::numeric_limits<std::int64_t>::min() / 2);
+  st_.hold.assign(n_, 0);
+  st_.hold_len.assign(n_, 0);
+  st_.slept_at.assign(n_, std::numeric_limits<std::int64_t>::min() / 2);
   mark_.assign(n_, 0);
   list_.reserve(n_);
   slot_.assign(n_, -1);
   active_.reserve(n_);
 }
 
-void Sleeping::wake_all() { std::fill(awake_.begin(), awake_.end(), 1); }
-
-void Sleeping::restore(std::vector<std::uint8_t>&& awake, std::vector<std::uint16_t>&& hold,
-                       std::vector<std::uint16_t>&& hold_len) {
-  awake_ = std::move(awake);
-  hold_ = std::move(hold);
-  hold_len_ = std::move(hold_len);
-}
+void Sleeping::wake_all() { std::fill(st_.awake.begin(), st_.awake.end(), 1); }
 
 void Sleeping::collect_active() {
   active_.clear();
   std::fill(slot_.begin(), slot_.end(), -1);
   for (int v = 0; v < n_; ++v)
-    if (awake_[v] && !pinned_[v]) {
+    if (st_.awake[v] && !pinned_[v]) {
       slot_[v] = static_cast<int>(active_.size());
       active_.push_back(v);
     }
@@ -68,11 +61,23 @@ void Sleeping::wake_around_forcing(const RowMatX3& vel) {
   for (int v = 0; v < n_; ++v) seed[v] = forced_[v];
   wake_rings(seed, 1);
   for (int v = 0; v < n_; ++v)
-    if (awake_[v] && vel.row(v).norm() >= p_.sleep_speed) seed[v] = 1;
+    if (st_.awake[v] && vel.row(v).norm() >= p_.sleep_speed) seed[v] = 1;
   wake_rings(seed, 1);
   for (int v = 0; v < n_; ++v) {
-    if (seed[v]) awake_[v] = 1;
+    if (seed[v]) st_.awake[v] = 1;
     seed[v] = 0;
+  }
+}
+
+void Sleeping::wake_flickering(int v) {
+  st_.awake[v] = 1;
+  // Woken within wake_hold steps of falling asleep: it flickers, so it stays awake, each time it
+  // flickers again twice as long (up to kMaxHold steps).
+  if (st_.steps - st_.slept_at[v] <= p_.wake_hold) {
+    st_.hold_len[v] = static_cast<std::uint16_t>(std::clamp(2 * int(st_.hold_len[v]), p_.wake_hold, kMaxHold));
+    st_.hold[v] = st_.hold_len[v];
+  } else {
+    st_.hold_len[v] = 0;
   }
 }
 
@@ -81,7 +86,7 @@ int Sleeping::wake_stressed_sleepers(const Speed& held) {
   for (int v : active_)
     for (int q = inc_.start[v]; q < inc_.start[v + 1]; ++q) {
       const int o = inc_.other[q];
-      if (!awake_[o] && !pinned_[o] && !mark_[o]) {
+      if (!st_.awake[o] && !pinned_[o] && !mark_[o]) {
         mark_[o] = 1;
         list_.push_back(o);
       }
@@ -90,17 +95,31 @@ int Sleeping::wake_stressed_sleepers(const Speed& held) {
   for (int o : list_) {
     mark_[o] = 0;
     if (held(o) * kHeldMargin >= p_.sleep_speed) {
-      awake_[o] = 1;
-      // Woken within wake_hold steps of falling asleep: it flickers, so it stays awake, each
-      // time it flickers again twice as long (up to kMaxHold steps).
-      if (steps_ - slept_at_[o] <= p_.wake_hold) {
-        hold_len_[o] = static_cast<std::uint16_t>(std::clamp(2 * int(hold_len_[o]), p_.wake_hold, kMaxHold));
-        hold_[o] = hold_len_[o];
-      } else {
-        hold_len_[o] = 0;
-      }
+      wake_flickering(o);
       ++woke;
+      for (State::Batch& b : st_.batches) b.pass_woken += st_.slept_at[o] == b.step;
     }
+  }
+  // A batch of which one pass stressed enough sleepers awake to redo the step, within
+  // wake_hold steps of its falling asleep, fell asleep in a sheet that is not at rest: a hanging
+  // curtain burning at its hem moves by less than sleep_speed everywhere, but each change of
+  // load travels up to the pins, waking a ring of sleepers a pass. The rest of the batch wakes
+  // with it, at once rather than in a wave of passes, and new batches wait. (The stragglers at
+  // the edge of a region resting on a table wake a few at a time, and keep their own hold.)
+  for (State::Batch& b : st_.batches) {
+    const int pass_woken = b.pass_woken;
+    b.pass_woken = 0;
+    if (b.flickered || pass_woken == 0 || st_.steps - b.step > p_.wake_hold ||
+        pass_woken * kRedoShare < static_cast<int>(active_.size()))
+      continue;
+    b.flickered = true;
+    for (int v = 0; v < n_; ++v)
+      if (!st_.awake[v] && st_.slept_at[v] == b.step) {
+        wake_flickering(v);
+        ++woke;
+      }
+    st_.batch_hold = std::clamp(2 * st_.batch_hold, p_.wake_hold, kMaxHold);
+    st_.flicker_at = st_.steps;
   }
   return woke;
 }
@@ -115,8 +134,8 @@ void Sleeping::update_sleep(RowMatX3& vel, RowMatX3& accel, const Speed& free) {
   parallel_for(0, na, kRowCost, [&](long a_) {
     const int a = static_cast<int>(a_);
     const int v = active_[a];
-    if (hold_[v] > 0) --hold_[v];
-    bool quiet = hold_[v] == 0 && !forced_[v] && vel.row(v).norm() < p_.sleep_speed;
+    if (st_.hold[v] > 0) --st_.hold[v];
+    bool quiet = st_.hold[v] == 0 && !forced_[v] && vel.row(v).norm() < p_.sleep_speed;
     for (int q = inc_.start[v]; quiet && q < inc_.start[v + 1]; ++q)
       quiet = vel.row(inc_.other[q]).norm() < p_.sleep_speed;
     if (quiet) quiet = free(v) < p_.sleep_speed;
@@ -127,11 +146,18 @@ void Sleeping::update_sleep(RowMatX3& vel, RowMatX3& accel, const Speed& free) {
   // redone step or a new factorization each time the motion stresses them awake.
   int quiet_count = 0;
   for (int v : active_) quiet_count += mark_[v];
-  const bool bulk = quiet_count * kSleepShare >= na;
+  // Batches that stayed asleep past wake_hold steps are forgotten; one that did clears the hold.
+  for (const State::Batch& b : st_.batches)
+    if (st_.steps - b.step > p_.wake_hold && !b.flickered) st_.batch_hold = 0;
+  st_.batches.erase(std::remove_if(st_.batches.begin(), st_.batches.end(),
+                                [&](const State::Batch& b) { return st_.steps - b.step > p_.wake_hold; }),
+                 st_.batches.end());
+  const bool bulk = quiet_count > 0 && quiet_count * kSleepShare >= na && st_.steps - st_.flicker_at >= st_.batch_hold;
+  if (bulk) st_.batches.push_back({st_.steps, 0, false});
   for (int v : active_) {
     if (mark_[v] && bulk) {
-      awake_[v] = 0;
-      slept_at_[v] = steps_;
+      st_.awake[v] = 0;
+      st_.slept_at[v] = st_.steps;
       vel.row(v).setZero();
       accel.row(v).setZero();
     }

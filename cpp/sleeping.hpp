@@ -7,6 +7,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <vector>
 
 #include "lattice.hpp"
@@ -17,6 +18,8 @@ struct DynamicsParams;
 
 /// Steps: the longest flicker hold (and DynamicsParams::wake_hold's upper bound).
 constexpr int kMaxHold = 10000;
+/// A step is redone when it stresses awake at least 1/kRedoShare of its awake count.
+constexpr int kRedoShare = 16;
 
 class Sleeping {
  public:
@@ -29,16 +32,34 @@ class Sleeping {
   Sleeping(int n, const SpringIncidence& incidence, const std::vector<std::uint8_t>& pinned,
            const DynamicsParams& p);
 
-  void wake(int v) { awake_[v] = 1; }
+  void wake(int v) { st_.awake[v] = 1; }
   void wake_all();
   /// @brief 1 where a vertex is awake (pinned ones included).
-  const std::vector<std::uint8_t>& awake() const { return awake_; }
-  /// @brief Steps each flickering vertex still stays awake, and the length of its last hold.
-  const std::vector<std::uint16_t>& hold() const { return hold_; }
-  const std::vector<std::uint16_t>& hold_len() const { return hold_len_; }
-  /// @brief Put back what awake(), hold() and hold_len() returned (a step that threw).
-  void restore(std::vector<std::uint8_t>&& awake, std::vector<std::uint16_t>&& hold,
-               std::vector<std::uint16_t>&& hold_len);
+  const std::vector<std::uint8_t>& awake() const { return st_.awake; }
+
+  /// @brief Who sleeps and what the flicker holds remember: taken before a step that may
+  /// throw, put back if it does.
+  struct State {
+    std::vector<std::uint8_t> awake;
+    std::vector<std::uint16_t> hold;      // steps a flickering sleeper still stays awake
+    std::vector<std::uint16_t> hold_len;  // the length of its last hold (doubles per flicker)
+    std::vector<std::int64_t> slept_at;   // step at which each vertex last fell asleep
+    std::int64_t steps = 0;               // steps taken
+    // The region's flicker hold. Quiet vertices fall asleep together, a batch a step; a batch
+    // of which one pass stresses enough sleepers awake to redo the step, within wake_hold
+    // steps, flickers: the rest of it wakes, and new batches wait batch_hold steps (doubling
+    // per flicker, forgotten once a batch stays asleep past wake_hold).
+    struct Batch {
+      std::int64_t step;  // it fell asleep at the end of this step
+      int pass_woken;     // its sleepers stressed awake by the pass in progress
+      bool flickered;
+    };
+    std::vector<Batch> batches;  // those that fell asleep within wake_hold steps
+    std::int64_t flicker_at = std::numeric_limits<std::int64_t>::min() / 2;  // a batch last flickered
+    int batch_hold = 0;
+  };
+  const State& state() const { return st_; }
+  void restore(State&& s) { st_ = std::move(s); }
 
   /// @brief Per vertex: forced this step (a crumple, or a heat change that would reach
   /// sleep_speed within it); set by the step before wake_around_forcing.
@@ -61,20 +82,19 @@ class Sleeping {
   /// net force alone would give a vertex within the step (nothing holding it back).
   void update_sleep(RowMatX3& vel, RowMatX3& accel, const Speed& free);
   /// @brief Count a step (a sleeper woken within wake_hold steps of falling asleep flickers).
-  void end_step() { ++steps_; }
+  void end_step() { ++st_.steps; }
 
  private:
   void wake_rings(std::vector<std::uint8_t>& flag, int rings) const;
+  // Wake a sleeper stressed awake, with the flicker hold if it slept under wake_hold steps.
+  void wake_flickering(int v);
 
   int n_;
   const SpringIncidence& inc_;
   const std::vector<std::uint8_t>& pinned_;
   const DynamicsParams& p_;
-  std::vector<std::uint8_t> awake_, forced_;
-  std::vector<std::uint16_t> hold_;      // steps a flickering sleeper still stays awake
-  std::vector<std::uint16_t> hold_len_;  // the length of its last hold (doubles per flicker)
-  std::vector<std::int64_t> slept_at_;   // step at which each vertex last fell asleep
-  std::int64_t steps_ = 0;               // steps taken
+  State st_;
+  std::vector<std::uint8_t> forced_;
   std::vector<int> active_, slot_;       // active vertices; slot_[v] = position in active_ or -1
   std::vector<std::uint8_t> mark_;       // scratch flags, all zero between uses
   std::vector<int> list_;                // scratch vertex list

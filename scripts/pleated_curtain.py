@@ -5,11 +5,12 @@ case the lattice it got (couples, Simulation.lattice_fit), the worst over the se
 simulated second.
 
     python scripts/pleated_curtain.py [--cells 128] [--seconds 20] [--lattice M] [--cases 0 1 2 3]
-                                      [--preconditioner auto|ldlt|jacobi]
+                                      [--preconditioner auto|ldlt|jacobi] [--sleeping on|off]
 
 --lattice M forces M (9 at 128 cells is the lattice the grid's rule alone chose: 64 couples).
 --cases picks rows of CASES; --preconditioner is the implicit solve's (docs/dynamics.md §4).
-Each row also says the CG iterations a step and how many solves the LDL^T factor preconditioned.
+Each row also says the passes, factorizations and CG iterations a step (step_stats) and how many
+solves the LDL^T factor preconditioned; --sleeping off integrates every vertex every step.
 """
 import argparse
 import time
@@ -29,17 +30,17 @@ def pleated(a, wavelength):
     return v, f
 
 
-def run(a, wavelength, wind, cells, seconds, lattice=None, preconditioner="auto"):
+def run(a, wavelength, wind, cells, seconds, lattice=None, preconditioner="auto", sleeping=True):
     v, f = pleated(a, wavelength)
     top = np.flatnonzero(np.isclose(v[:, 2], v[:, 2].max()))
     sim = thinburn.Simulation(v, f, material="curtain", cells=cells, pinned=top, climb=0.4, lattice=lattice)
-    sim.set_dynamics(preconditioner=preconditioner)
+    sim.set_dynamics(preconditioner=preconditioner, sleeping=sleeping)
     sim.wind = (0.0, wind, 0.0)
     sim.ignite((0.5, 0.0, 0.06), radius=0.02)
     measure = EdgeStrain(v, f)
     e = measure.edges
     p99 = worst = 0.0
-    solves = {"cg_iterations": 0, "ldlt_solves": 0}
+    solves = {"passes": 0, "factorizations": 0, "cg_iterations": 0, "ldlt_solves": 0}
     t0 = time.perf_counter()
     steps = int(round(24 * seconds))
     for k in range(steps):
@@ -53,7 +54,8 @@ def run(a, wavelength, wind, cells, seconds, lattice=None, preconditioner="auto"
             s = measure(x)[keep]
             p99, worst = max(p99, float(np.percentile(s, 99))), max(worst, float(s.max()))
     wall = (time.perf_counter() - t0) / seconds
-    return sim.lattice_couples, sim.lattice_fit, p99, worst, wall, solves["cg_iterations"] / steps, solves["ldlt_solves"]
+    per_step = {key: count / steps for key, count in solves.items()}
+    return sim.lattice_couples, sim.lattice_fit, p99, worst, wall, per_step, solves["ldlt_solves"]
 
 
 def main():
@@ -63,13 +65,15 @@ def main():
     ap.add_argument("--lattice", type=int, default=None)
     ap.add_argument("--cases", type=int, nargs="+", default=list(range(len(CASES))))
     ap.add_argument("--preconditioner", choices=("auto", "ldlt", "jacobi"), default="auto")
+    ap.add_argument("--sleeping", choices=("on", "off"), default="on")
     a = ap.parse_args()
     for amp, wavelength, wind in (CASES[i] for i in a.cases):
-        couples, fit, p99, worst, wall, its, ldlt = run(amp, wavelength, wind, a.cells, a.seconds, a.lattice,
-                                                       a.preconditioner)
+        couples, fit, p99, worst, wall, per, ldlt = run(amp, wavelength, wind, a.cells, a.seconds, a.lattice,
+                                                       a.preconditioner, a.sleeping == "on")
         print(f"pleats {100 * amp:.0f} cm every {100 * wavelength:.0f} cm, wind {wind} m/s: {couples} couples, "
               f"fit {fit:.2f}; unburnt edges p99 {100 * p99:.2f} %, worst {100 * worst:.2f} %; "
-              f"{wall:.2f} s per simulated s; {its:.0f} CG iterations a step, {ldlt} LDLT solves", flush=True)
+              f"{wall:.2f} s per simulated s; a step: {per['passes']:.2f} passes, {per['factorizations']:.2f} "
+              f"factorizations, {per['cg_iterations']:.1f} CG iterations; {ldlt} LDLT solves", flush=True)
 
 
 if __name__ == "__main__":

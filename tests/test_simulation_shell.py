@@ -551,3 +551,21 @@ def test_a_perfectly_flat_sheet_stands_in_its_plane_and_a_lying_one_keeps_its_st
     v, f = rect_sheet(0.3, 0.3, nx=9, ny=9)
     lying = thinburn.Simulation(v, f, material="paper", cells=16, imperfection=0.1)
     assert np.array_equal(lying.vertex_positions(), v)
+
+
+def test_lattice_awake_shows_which_control_vertices_the_next_step_integrates(square):
+    # A sheet left on a table settles and sleeps whole: lattice_awake goes from all True (every
+    # vertex integrated) to all False, in the lattice's (M, M, 2) layout, and agrees with
+    # step_stats' count.
+    v, f = square
+    sim = thinburn.Simulation(v, f, cells=32, floor=0.0)
+    M = sim.lattice_size
+    awake = sim.lattice_awake()
+    assert awake.shape == (M, M, 2) and awake.dtype == bool and awake.all()
+    for _ in range(48):
+        sim.step(1 / 24)
+        if not sim.lattice_awake().any():
+            break
+    assert not sim.lattice_awake().any()
+    sim.step(1 / 24)
+    assert sim.step_stats()["awake"] == 0

@@ -201,6 +201,13 @@ void define_simulation(py::module_& m) {
       .def("lattice_rest_positions", [](const S& s) { return s.lattice() ? s.lattice()->rest() : RowMatX3(0, 3); })
       .def("control_masses", &S::control_masses)
       .def("control_strength", [](const S& s) { return s.dynamics() ? s.dynamics()->strength() : Eigen::VectorXd(); })
+      .def("lattice_awake", [](const S& s) {
+        if (!s.dynamics()) return Eigen::VectorXd();
+        const std::vector<std::uint8_t> a = s.dynamics()->awake();
+        Eigen::VectorXd out(a.size());
+        for (std::size_t v = 0; v < a.size(); ++v) out[v] = a[v];
+        return out;
+      })
       .def("heat", [](const S& s) { return s.bending() ? s.bending()->heat() : Eigen::VectorXd(); })
       .def("pyrolysis", [](const S& s) { return s.bending() ? s.bending()->pyrolysis() : Eigen::VectorXd(); })
       .def("rotation", [](const S& s) {

@@ -518,6 +518,11 @@ class Simulation:
         the sheet is intact, down to ash_strength where all it carries burnt."""
         return self._couples(self._sim.control_strength, "control_strength", 2)
 
+    def lattice_awake(self) -> np.ndarray:
+        """(M, M, 2) bool: the control vertices the next step integrates; the others sleep
+        or are pinned (docs/dynamics.md §5). ``step_stats()["awake"]`` counts the last step's."""
+        return self._couples(self._sim.lattice_awake, "lattice_awake", 2) > 0.5
+
     def particles(self):
         """(positions (k, 3), temperatures (k,)) of the live fire particles."""
         return self._sim.particles()
