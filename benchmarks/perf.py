@@ -30,7 +30,7 @@ from thinburn.scenes import rect_sheet
 from thinburn.simulation import Simulation
 
 FRAME_DT = 1.0 / 24.0
-STAT_KEYS = ("front_active", "burning", "fringe", "awake", "particles", "cg_iterations")
+STAT_KEYS = ("front_active", "burning", "fringe", "awake", "particles", "cg_iterations", "factorizations")
 PAPER_REFERENCE = dict(
     part="frames", method="paper (Liu et al. 2009)", resolution=128, frames_per_second=10.0,
     ms_per_frame=100.0, reference=True,
@@ -221,7 +221,8 @@ def bench_frames(materials, cells, frames, warmup, vertex_counts, repeat, thread
                 log(f"frames      {material:10s} {mesh:>4s} mesh ({len(scene.vertices):6d} vertices) "
                     f"N={cells} M={sim.lattice_size} threads={sim.threads} {s['ms_per_frame']:7.2f} "
                     f"ms/frame {s['frames_per_second']:7.1f} frames/s awake={s['awake']:.0f} "
-                    f"particles={s['particles']:.0f} cg={s['cg_iterations']:.0f}")
+                    f"particles={s['particles']:.0f} cg={s['cg_iterations']:.0f} "
+                    f"factorizations={s['factorizations']:.2f}")
     rows.append(dict(PAPER_REFERENCE))
     return rows
 

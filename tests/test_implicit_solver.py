@@ -105,7 +105,7 @@ def test_a_kept_factor_of_another_awake_set_costs_at_most_about_a_factorization(
     # of rank about 3 x the vertices that changed next to it, and CG pays about that many more
     # iterations. Once a solve's extra iterations cost a factorization, it refactors there. With
     # wake_hold=0 the curtain's awake set changes nearly every step: the most iterations of a
-    # step (up to 4 passes) measured 134, and 5529 in all; without the rule 748 and 24744.
+    # step (up to 4 passes) measured 134, and 5503 in all; without the rule 748 and 24744.
     _, counts = hanging_curtain(wake_hold=0)
     assert counts["most_cg"] <= 150
     assert counts["cg_iterations"] <= 6000

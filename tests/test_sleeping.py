@@ -64,11 +64,11 @@ def test_a_hanging_curtain_that_is_never_at_rest_is_not_put_to_sleep_in_waves(ha
     # A hanging sheet burning at its hem moves by less than sleep_speed everywhere, but every
     # change of load travels up to its pins: a batch of sleepers is stressed awake a ring per
     # pass. Such a batch flickers: the rest of it wakes at once and new batches wait (doubling).
-    # Over 5 s: 124 passes and 13 factorizations against 120 and 7 without sleeping (before the
+    # Over 5 s: 124 passes and 11 factorizations against 120 and 7 without sleeping (before the
     # batch hold: 145 and 48, and 1023 CG iterations in one step), ending 5.8e-10 m from the run
     # without sleeping (before: 5.8e-7 m).
     sim, on = hanging_curtain(sleeping=True)
     ref, off = hanging_curtain(sleeping=False)
     assert on["passes"] <= off["passes"] + 6
-    assert on["factorizations"] <= 16
+    assert on["factorizations"] <= 14
     assert np.abs(sim.vertex_positions() - ref.vertex_positions()).max() < 2e-9
