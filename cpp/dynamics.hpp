@@ -84,7 +84,8 @@ struct DynamicsParams {
   /// Steps a flickering vertex stays awake: one that its neighbours' motion woke within this
   /// many steps of falling asleep. Vertices at the edge of a moving region otherwise fall asleep
   /// and are woken again step after step, each time redoing the step (a pass) and changing the
-  /// active set (a new factorization). A vertex that flickers again is held twice as long.
+  /// active set (a new factorization). A vertex that flickers again is held twice as long. A
+  /// batch of sleepers stressed awake in bulk within it holds off new batches as long (sleeping.hpp).
   int wake_hold = 12;
   int substeps = 0;            ///< 0: chosen per step from stability (explicit) or motion (implicit); <= kMaxFixedSubsteps
   int max_substeps = 10000;    ///< explicit steps needing more throw std::runtime_error; <= kMaxSubstepsCeiling

@@ -151,7 +151,8 @@ class Simulation:
           ``ldlt_max_vertices`` (2500) awake lattice vertices; above, whichever of it and
           couple-block Jacobi measurably costs fewer multiply-adds a solve; "ldlt"; "jacobi";
           ``step_stats()["ldlt_solves"]`` says which ran), ``refactor_iterations``, ``wake_hold`` (steps a vertex woken
-          again soon after falling asleep stays awake, doubling per repeat);
+          again soon after falling asleep stays awake, doubling per repeat; after a batch of
+          sleepers is stressed awake in bulk, the steps no new batch falls asleep, doubling too);
         * the particles, prefixed ``particle_``: ``particle_capacity``,
           ``particle_birth_rate``, ``particle_temperature0``, ``particle_cooling``,
           ``particle_lifetime``, ``particle_lifetime_jitter``, ``particle_buoyancy``,
