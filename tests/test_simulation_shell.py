@@ -83,7 +83,7 @@ def test_a_fabric_collapsing_into_a_pile_keeps_its_edge_lengths(material, median
     A pile is chaotic: a change in the solver's rounding moved one drop from 1.13 % to 4.77 %
     while the others barely moved, so this takes the median over six drop heights (z0 = 5.0 ..
     6.0 cm, `python scripts/pile_ensemble.py --sizes 0.2`): measured 0.66 % (cloth; 1.10 % at
-    commit 4766db8) and 7.55 % (silk; 5.58 %; silk piles are crushed, README "Known
+    commit 4766db8) and 7.53 % (silk; 5.58 %; silk piles are crushed, README "Known
     limitations"), and every drop under 16 % (measured at most 4.77 and 14.84 %)."""
     from thinburn._mesh_measures import EdgeStrain
     strains = []
