@@ -358,6 +358,15 @@ int ImplicitSolver::rent_budget() const {
   return static_cast<int>(std::min<double>(s_.p.cg_max_iterations, f.fresh_iterations + std::ceil(extra)));
 }
 
+void ImplicitSolver::residual(double h) {
+  // r = S (b - A dv), S the contacts' filter.
+  Buffers B = buffers();
+  const int na = static_cast<int>(s_.active.size()), N = 3 * na;
+  apply_A(h, B.dv, B.Ap);
+  for (int i = 0; i < N; ++i) B.r[i] = B.b[i] - B.Ap[i];
+  for (int a = 0; a < na; ++a) s_.contacts.filter(s_.active[a], B.r + 3 * a);
+}
+
 int ImplicitSolver::cg(double h, double ref, double floor_abs, int max_iterations, bool& converged) {
   // Modified PCG (Baraff and Witkin 1998) from the start value in B.dv: constrained DOFs start
   // at their prescribed value (v_z -> 0) and every search direction is filtered to leave them
@@ -367,9 +376,6 @@ int ImplicitSolver::cg(double h, double ref, double floor_abs, int max_iteration
   auto axpy = [&](double alpha, const double* xv, double* y) {  // y += alpha x
     parallel_for(0, N, kAxpyCost, [&](long i) { y[i] += alpha * xv[i]; });
   };
-  apply_A(h, B.dv, B.Ap);
-  for (int i = 0; i < N; ++i) B.r[i] = B.b[i] - B.Ap[i];
-  for (int a = 0; a < na; ++a) s_.contacts.filter(s_.active[a], B.r + 3 * a);
   const double tol = std::max(s_.p.cg_tolerance * ref, floor_abs);
   converged = std::sqrt(det_dot(B.r, B.r, N, B.partial)) <= floor_abs;
   if (converged) return 0;
@@ -408,13 +414,11 @@ int ImplicitSolver::solve(double h) {
   if (use_ldlt()) refresh_factor(h);
   prepare_preconditioner(h);
   // The tolerance's scale, fixed for the solve (a restart must not tighten it): the larger of
-  // the start residual and the filtered b.
-  apply_A(h, B.dv, B.Ap);
-  for (int i = 0; i < N; ++i) B.r[i] = B.b[i] - B.Ap[i], B.z[i] = B.b[i];
-  for (int a = 0; a < na; ++a) {
-    s_.contacts.filter(s_.active[a], B.r + 3 * a);
-    s_.contacts.filter(s_.active[a], B.z + 3 * a);
-  }
+  // the start residual and the filtered b (in z until the first preconditioning; b stays as
+  // assembled, constraint_impulse reads it).
+  residual(h);
+  for (int i = 0; i < N; ++i) B.z[i] = B.b[i];
+  for (int a = 0; a < na; ++a) s_.contacts.filter(s_.active[a], B.z + 3 * a);
   const double ref = std::max(std::sqrt(det_dot(B.r, B.r, N, B.partial)), std::sqrt(det_dot(B.z, B.z, N, B.partial)));
   // Absolute floor: a residual below cg_velocity_tolerance times the mass norm changes the
   // velocities by less than about that (A >= M), whatever rounding-level right-hand side a
@@ -431,6 +435,7 @@ int ImplicitSolver::solve(double h) {
     factor_->stale = true;
     refresh_factor(h);
     prepare_preconditioner(h);
+    residual(h);  // the true residual, not the one the iterations updated
     since_factor = cg(h, ref, floor_abs, s_.p.cg_max_iterations - iterations, converged);
     iterations += since_factor;
   }

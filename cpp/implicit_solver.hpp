@@ -113,8 +113,11 @@ class ImplicitSolver {
   void prepare_preconditioner(double h);
   // Iterations the solve may take on a kept factor before refactoring pays.
   int rent_budget() const;
-  // Conjugate gradients from buffers().dv until the residual is below max(cg_tolerance ref,
-  // floor_abs) (converged) or max_iterations ran; returns the iterations.
+  // buffers().r = the filtered b - A dv.
+  void residual(double h);
+  // Conjugate gradients from buffers().dv and its residual in buffers().r until the residual is
+  // below max(cg_tolerance ref, floor_abs) (converged) or max_iterations ran; returns the
+  // iterations.
   int cg(double h, double ref, double floor_abs, int max_iterations, bool& converged);
 
   View s_;

@@ -106,10 +106,10 @@ int Sleeping::wake_stressed_sleepers(const Speed& held) {
   // falling asleep, fell asleep in a sheet that is not at rest: a hanging curtain burning at
   // its hem moves by less than sleep_speed everywhere, but each change of load travels up to
   // the pins, waking the ring of sleepers next to the moving part a pass (60-92 % of it on the
-  // half-size curtain of tests/test_sleeping.py). The rest of the batch wakes with it, at once
-  // rather than in a wave of passes, and new batches wait. Where a region rests on a floor,
-  // the floor holds most of its border (a hot spot growing on a lying sheet wakes 15 % of it),
-  // and the stragglers that wake keep their own hold.
+  // half-size curtain of tests/test_sleeping.py, counted with a probe here). The rest of the
+  // batch wakes with it, at once rather than in a wave of passes, and new batches wait. Where a
+  // region rests on a floor, the floor holds most of its border (a hot spot growing on a lying
+  // sheet woke 15 % of it), and the stragglers that wake keep their own hold.
   for (State::Batch& b : st_.batches) {
     const int pass_woken = b.pass_woken, pass_border = b.pass_border;
     b.pass_woken = b.pass_border = 0;

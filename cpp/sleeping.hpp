@@ -47,8 +47,8 @@ class Sleeping {
     std::int64_t steps = 0;               // steps taken
     // The region's flicker hold. Quiet vertices fall asleep together, a batch a step; a batch
     // of which one pass stresses awake most of the sleepers it checks, enough to redo the step,
-    // within wake_hold steps, flickers: the rest of it wakes, and new batches wait batch_hold steps (doubling
-    // per flicker, forgotten once a batch stays asleep past wake_hold).
+    // within wake_hold steps, flickers: the rest of it wakes, and new batches wait batch_hold
+    // steps (doubling per flicker, forgotten once a batch stays asleep past wake_hold).
     struct Batch {
       std::int64_t step;  // it fell asleep at the end of this step
       int pass_border;    // its sleepers next to the active set, checked by the pass in progress

@@ -1,9 +1,11 @@
 """Sleeping (cpp/sleeping.*, docs/dynamics.md §5): a lattice at rest sleeps and stays exactly
 still, a hot spot wakes only its neighbourhood and moves as without sleeping, a mass change wakes
-its vertex."""
+its vertex; a batch that flickers on a hanging curtain wakes whole, and none does on a table."""
 import numpy as np
 
+import thinburn
 from thinburn.dynamics import vertex_masses
+from thinburn.scenes import rect_sheet
 from lattice_cases import CHORD, make, zeros
 
 
@@ -79,10 +81,8 @@ def test_a_sheet_burning_on_a_table_keeps_its_rest_asleep():
     # The other side of the batch rule above: a 1 m paper sheet (33 x 33 couples) lit at a
     # corner on a table, 30 s. Its quiet regions rest on the floor, and their stragglers wake a
     # few at a time, which is no batch's flicker: the last 2 s keep 297 of 2178 control vertices
-    # awake on average, as before the rule (`python scripts/sleep_accuracy.py`'s corner scene).
-    from thinburn.scenes import rect_sheet
-    import thinburn
-
+    # awake on average, as before the rule (`python scripts/sleep_accuracy.py --seconds 30
+    # --scenes corner`).
     sim = thinburn.Simulation(*rect_sheet(1.0, 1.0, nx=41, ny=41), material="paper", cells=64, lattice=33,
                               floor=0.0, speed_noise=0.0, duration_noise=0.0)
     sim.ignite((0.0, 0.0, 0.0), time=0.0, radius=0.03)

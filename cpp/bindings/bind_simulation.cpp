@@ -4,6 +4,7 @@
 #include <pybind11/numpy.h>
 #include <pybind11/stl.h>
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -202,10 +203,9 @@ void define_simulation(py::module_& m) {
       .def("control_masses", &S::control_masses)
       .def("control_strength", [](const S& s) { return s.dynamics() ? s.dynamics()->strength() : Eigen::VectorXd(); })
       .def("lattice_awake", [](const S& s) {
-        if (!s.dynamics()) return Eigen::VectorXd();
-        const std::vector<std::uint8_t> a = s.dynamics()->awake();
-        Eigen::VectorXd out(a.size());
-        for (std::size_t v = 0; v < a.size(); ++v) out[v] = a[v];
+        const std::vector<std::uint8_t> a = s.dynamics() ? s.dynamics()->awake() : std::vector<std::uint8_t>();
+        py::array_t<bool> out(a.size());
+        std::copy(a.begin(), a.end(), out.mutable_data());
         return out;
       })
       .def("heat", [](const S& s) { return s.bending() ? s.bending()->heat() : Eigen::VectorXd(); })

@@ -522,7 +522,7 @@ class Simulation:
     def lattice_awake(self) -> np.ndarray:
         """(M, M, 2) bool: the control vertices the next step integrates; the others sleep
         or are pinned (docs/dynamics.md §5). ``step_stats()["awake"]`` counts the last step's."""
-        return self._couples(self._sim.lattice_awake, "lattice_awake", 2) > 0.5
+        return self._couples(self._sim.lattice_awake, "lattice_awake", 2)
 
     def particles(self):
         """(positions (k, 3), temperatures (k,)) of the live fire particles."""
