@@ -13,7 +13,8 @@ Run: python scripts/folded_letter.py [--turns 30 90 150] [--folds line strip] [-
 --crossings: instead, the demo's letter (thinburn.scenes.folded_sheet, folded across its middle
 on a row of vertices) folded nearly shut (--turns, default 160 170 175), on its table, lit at a
 corner of the lying half, cells=64: in how many frames a mesh edge passes through a triangle of
-the sheet (ipctk.has_intersections), and the first few.
+the sheet (ipctk.has_intersections), the first few, and in how many it does so among the faces a
+render keeps (the add-on removes a face once all its vertices burnt out).
 """
 import argparse
 
@@ -38,18 +39,25 @@ def crossings(turns, seconds):
     from thinburn._mesh_measures import mesh_edges
     from thinburn.scenes import A4, folded_sheet
 
+    def collision_mesh(V, F):
+        E = mesh_edges(F).astype(np.int32)
+        return ipctk.CollisionMesh(np.asfortranarray(V), np.asfortranarray(E), np.asfortranarray(F.astype(np.int32)))
+
     for turn in turns:
         V, F = folded_sheet(A4[0], A4[1], angle=turn, nx=43, ny=61)
-        mesh = ipctk.CollisionMesh(np.asfortranarray(V), np.asfortranarray(mesh_edges(F).astype(np.int32)),
-                                   np.asfortranarray(F.astype(np.int32)))
+        mesh = collision_mesh(V, F)
         sim = thinburn.Simulation(V, F, cells=64, floor=0.0)
         sim.ignite((0.004, 0.004, 0.0))
-        crossed = []
+        crossed, kept_crossed = [], 0
         for k in range(24 * seconds):
             sim.step(1 / 24)
-            if ipctk.has_intersections(mesh, np.asfortranarray(sim.vertex_positions())):
+            X = np.asfortranarray(sim.vertex_positions())
+            if ipctk.has_intersections(mesh, X):
                 crossed.append(k + 1)
-        print(f"turn {turn:5.1f}: {len(crossed)} of {24 * seconds} frames cross, first {crossed[:3]}", flush=True)
+                kept = (sim.vertex_burnout_times() > sim.time)[F].any(axis=1)
+                kept_crossed += ipctk.has_intersections(collision_mesh(V, F[kept]), X)
+        print(f"turn {turn:5.1f}: {len(crossed)} of {24 * seconds} frames cross, first {crossed[:3]}; "
+              f"{kept_crossed} among the faces a render keeps", flush=True)
 
 
 def main():

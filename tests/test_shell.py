@@ -124,13 +124,17 @@ def test_a_burning_shell_crumples_without_leaving_its_layer_or_stretching(shape)
     assert (sim.cell_states() == 2).mean() > 0.2
 
 
-@pytest.mark.parametrize("turn, bound, near_bound", [(30.0, 0.0045, 0.016), (150.0, 0.008, 0.006)])
+@pytest.mark.parametrize("turn, bound, near_bound", [(30.0, 0.003, 0.033), (150.0, 0.0082, 0.003)])
 def test_a_folded_letter_burning_on_its_table_keeps_its_fold(turn, bound, near_bound):
     # The demo's letter (A4 folded across its middle by 30 degrees) and one folded back over
     # itself (150), lit at a corner of the lying half, 40 s at cells=48. Its fold is a crease
     # (docs/lattice.md, "Creases"): p99 of |l/L - 1| over unburnt edges, the most over the run,
-    # measured 0.33 % and 0.65 % (within 1 cm of the fold 1.43 % and 0.49 %); with one MLS window
-    # across the fold 5.39 % and 1.86 % (37.6 % and 2.99 % near it).
+    # measured 0.26 % and 0.78 % (within 1 cm of the fold 3.15 % and 0.26 %); with one MLS window
+    # across the fold 5.39 % and 1.86 % (37.6 % and 2.99 % near it). Before the rim's corners had
+    # couples (docs/lattice.md, "Rim couples"): 0.33 % and 0.65 % (1.43 % and 0.49 %). The 30
+    # degree letter has 10 couples at cells=48, 4 of them at its corners, and its fold's 3.15 %
+    # is one second (at 25 s; 0.65 % at 20 s, 0.50 % at 30 s); at cells=64 it is 0.46 % against
+    # 1.23 % before.
     V, F = folded_sheet(A4[0], A4[1], angle=turn, nx=43, ny=61)
     measure = EdgeStrain(V, F)
     E = measure.edges
@@ -250,16 +254,18 @@ def test_a_lattice_is_made_fine_enough_to_carry_the_meshs_pleats():
     chosen lattice is made finer until the mesh lies in its layer, then finer again where the
     layer, now following the pleats, turns faster than the couples can: measured 1024 couples
     (lattice_fit 0.094) and 0.15 % strain, where the grid's rule alone gave 16 couples and
-    7.17 %, and an explicit lattice=5 (18 couples, fit 2.31) 8.1 %. (Without the second
-    curvature pass: 284 couples, fit 0.19, 0.16 %; before the rim had couples: 284 couples,
-    fit 0.45, 0.53 %; lattice=5 fit 3.61, 5.99 %.)"""
+    7.17 %. An explicit lattice=5 (18 couples, fit 2.56) hangs in still air within 0.80 % since
+    its corners have couples (8.13 % before, fit 2.31), but in a 1.5 m/s wind across it its
+    pleats stretch by 26.6 % (231 % before). (Without the second curvature pass: 284 couples,
+    fit 0.19, 0.16 %; before the rim had couples: 284 couples, fit 0.45, 0.53 %; lattice=5 fit
+    3.61, 5.99 %.)"""
     sim, strain = _pleated_curtain()
     assert sim.geometry == "surface"
     assert sim.lattice_couples > 900 and sim.lattice_fit <= 0.15
     assert strain < 0.002
-    coarse, coarse_strain = _pleated_curtain(lattice=5)
+    coarse, coarse_strain = _pleated_curtain(lattice=5, wind=1.5)
     assert coarse.lattice_couples < 30 and coarse.lattice_fit > 2.0
-    assert coarse_strain > 0.06
+    assert coarse_strain > 0.2
 
 
 def test_pleats_hold_their_length_in_a_wind():
