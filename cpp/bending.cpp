@@ -14,6 +14,8 @@ const std::vector<param::Field<BendingParams>>& BendingParams::fields() {
       field("alpha", &P::alpha, "eq 6: radians per unit heat difference"),
       field("beta", &P::beta, "eq 6: radians per unit pyrolysis difference"),
       field("d_min", &P::d_min, above(0), "m: guards d -> 0 in eqs 2 and 3"),
+      field("pyrolysis_range", &P::pyrolysis_range, at_least(0),
+            "m: eq 3 counts the ignition points within this distance (0: all)"),
       field("max_rotation", &P::max_rotation, at_least(0), "rad: |D| saturates smoothly here"),
       // The keywords name the kernel sums' options after what they sum.
       field("heat_tolerance", &P::tolerance, within(0, 1, true, true),
@@ -38,6 +40,7 @@ KernelSumOptions Bending::options(int power) const {
   o.d_min = p_.d_min;
   o.method = p_.fast ? SumMethod::Fast : SumMethod::Direct;
   o.tolerance = p_.tolerance;
+  if (power == 1) o.cutoff = p_.pyrolysis_range;
   return o;
 }
 

@@ -17,6 +17,11 @@ struct BendingParams {
   double alpha = 1.0;      ///< eq 6 radians per unit heat difference
   double beta = 1e-3;      ///< eq 6 radians per unit pyrolysis difference
   double d_min = 0.005;    ///< m, guards d → 0 in eqs 2 and 3
+  /// m: eq 3 counts the ignition points within this distance (0: all, the paper's reading).
+  /// 3 cm holds the burning band of every preset (V0 x burn time: 12-24 mm); with all points,
+  /// a burning corner's curl lifted an A4 sheet's far corner 34 mm (docs/dynamics.md §2,
+  /// "Pyrolysis reaches as far as").
+  double pyrolysis_range = 0.03;
   /// rad: |D| saturates smoothly here (D = Dmax tanh(D_raw / Dmax)), so the curl rolls across
   /// the front at most this far between neighbouring couples: a lattice bent by theta carries
   /// the mesh on chords, its edges shorter by about theta^2 / 24 (6 % at the old 1.2 rad).

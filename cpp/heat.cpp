@@ -2,9 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numeric>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
+#include "point_grid.hpp"
 #include "threads.hpp"
 
 namespace thinburn {
@@ -45,6 +48,39 @@ void direct_sum(const double* x, const double* w, int n, const RowMatX3& targets
       const double dx = yx - x[3 * i], dy = yy - x[3 * i + 1], dz = yz - x[3 * i + 2];
       s += w[i] * kernel<P>(std::sqrt(dx * dx + dy * dy + dz * dz), d_min);
     }
+    out(j) = s;
+  });
+}
+
+// The truncated kernel K(d) - K(cutoff) over the sources within the cutoff: sources in a
+// dense grid of cells of the cutoff (a cell's sources in index order, so every target sums in
+// a fixed order), each target visiting the cells its cutoff box meets.
+template <int P>
+void cutoff_sum(const RowMatX3& sources, const Eigen::VectorXd& w, const RowMatX3& targets, double d_min,
+                double cutoff, Eigen::VectorXd& out) {
+  thread_local PointGrid grid;
+  thread_local std::vector<int> all;
+  all.resize(static_cast<std::size_t>(sources.rows()));
+  std::iota(all.begin(), all.end(), 0);
+  grid.build(all, sources, cutoff);
+  const double floor_value = kernel<P>(cutoff, d_min);
+  out.setZero(targets.rows());
+  if (all.empty()) return;
+  const PointGrid& g = grid;
+  parallel_for(0, targets.rows(), 64L, [&](long j) {
+    const Eigen::Vector3d y = targets.row(j).transpose();
+    const Eigen::Vector3d a = y.array() - cutoff, b = y.array() + cutoff;
+    if ((a.array() > g.hi().array()).any() || (b.array() < g.lo().array()).any()) return;
+    Eigen::Array3i k0, k1;
+    g.range(a, b, k0, k1);
+    double s = 0.0;
+    for (int i = k0(0); i <= k1(0); ++i)
+      for (int k = k0(1); k <= k1(1); ++k)
+        for (int l = k0(2); l <= k1(2); ++l)
+          for (const int* it = g.begin(i, k, l), *e = g.end(i, k, l); it != e; ++it) {
+            const double d = (sources.row(*it).transpose() - y).norm();
+            if (d < cutoff) s += w(*it) * (kernel<P>(d, d_min) - floor_value);
+          }
     out(j) = s;
   });
 }
@@ -234,6 +270,7 @@ void validate(const KernelSumOptions& opt) {
           "method must be Direct or Fast");
   require(std::isfinite(opt.tolerance) && opt.tolerance > 0.0 && opt.tolerance < 1.0,
           "tolerance must be in (0, 1)");
+  require(std::isfinite(opt.cutoff) && opt.cutoff >= 0.0, "cutoff must be finite and >= 0");
 }
 
 void KernelSummer::build(const RowMatX3& sources, const Eigen::VectorXd& w) {
@@ -384,6 +421,17 @@ void KernelSummer::evaluate(const RowMatX3& targets, const KernelSumOptions& opt
 void kernel_sum(const RowMatX3& sources, const Eigen::VectorXd& w, const RowMatX3& targets,
                 const KernelSumOptions& opt, Eigen::VectorXd& out, Eigen::VectorXd* error_bound) {
   validate(opt);
+  if (opt.cutoff > 0.0) {
+    check_sources(sources, w);
+    check_points(targets, "targets");
+    if (error_bound) error_bound->setZero(targets.rows());
+    if (opt.power == 1) {
+      cutoff_sum<1>(sources, w, targets, opt.d_min, opt.cutoff, out);
+    } else {
+      cutoff_sum<2>(sources, w, targets, opt.d_min, opt.cutoff, out);
+    }
+    return;
+  }
   if (opt.method == SumMethod::Direct) {
     check_sources(sources, w);
     check_points(targets, "targets");

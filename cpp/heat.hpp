@@ -25,6 +25,12 @@ struct KernelSumOptions {
   double d_min = 0.01;                   ///< m, > 0: keeps K finite at d = 0
   SumMethod method = SumMethod::Fast;    ///< Direct: all pairs; Fast: octree
   double tolerance = 0.01;               ///< relative error bound of Fast, in (0, 1)
+  /// m, >= 0. 0: the kernel reaches everywhere. > 0: K(d) - K(cutoff) within the cutoff, 0
+  /// beyond, summed exactly over the sources within it (a grid of cells of `cutoff`; method
+  /// and tolerance are not used). The constant K(cutoff) cancels from the difference between
+  /// two targets for every source within the cutoff of both, so the difference keeps their
+  /// near field (eq 3's D: a couple's top and bottom) and drops only the far sources.
+  double cutoff = 0.0;
 };
 
 /// @brief Validate options; throws std::invalid_argument naming the field.
@@ -82,7 +88,8 @@ class KernelSummer {
   double total_weight_ = 0.0;
 };
 
-/// @brief out(j) = sum_i w(i) / (|targets(j) - sources(i)| + d_min)^power, direct or fast.
+/// @brief out(j) = sum_i w(i) / (|targets(j) - sources(i)| + d_min)^power, direct or fast (or
+/// truncated at opt.cutoff).
 /// @param error_bound if not null, a per-target bound on |out(j) - exact(j)| (absolute).
 /// Fast reuses a per-thread KernelSummer's buffers across calls.
 void kernel_sum(const RowMatX3& sources, const Eigen::VectorXd& w, const RowMatX3& targets,

@@ -32,8 +32,9 @@ def test_heat_is_eq_2_summed_over_particles_and_steps():
 
 
 def test_pyrolysis_is_eq_3_and_is_recomputed():
+    # pyrolysis_range=0: every ignition point counts, as in the paper.
     cp, d_min = 0.8, 0.005
-    b = Bending(2, cp=cp, d_min=d_min, heat_fast=False)
+    b = Bending(2, cp=cp, d_min=d_min, heat_fast=False, pyrolysis_range=0.0)
     control = _couples()
     pts = np.array([[0.0, 0.0, 0.02], [0.1, 0.05, 0.0]])
     d = np.linalg.norm(control[:, None, :] - pts[None, :, :], axis=2)
@@ -41,6 +42,21 @@ def test_pyrolysis_is_eq_3_and_is_recomputed():
     np.testing.assert_allclose(b.pyrolysis, cp * (1 / (d + d_min)).sum(axis=1), rtol=1e-13)
     b.set_pyrolysis(control, pts[:1])  # recomputed, not accumulated
     np.testing.assert_allclose(b.pyrolysis, cp / (d[:, 0] + d_min), rtol=1e-13)
+
+
+def test_pyrolysis_counts_the_ignition_points_within_its_range():
+    # The default pyrolysis_range (3 cm): each point closer than it adds 1/(d + d_min) less its
+    # value at the range; a point 10 cm away adds nothing (docs/dynamics.md §2, "Pyrolysis
+    # reaches as far as"). Each couple has one point within the range and one beyond it.
+    cp, d_min, reach = 0.8, 0.005, 0.03
+    b = Bending(2, cp=cp, d_min=d_min)
+    control = _couples()
+    pts = np.array([[0.0, 0.0, 0.02], [0.1, 0.015, 0.0]])
+    d = np.linalg.norm(control[:, None, :] - pts[None, :, :], axis=2)
+    b.set_pyrolysis(control, pts)
+    want = cp * np.where(d < reach, 1 / (d + d_min) - 1 / (reach + d_min), 0.0).sum(axis=1)
+    assert want.min() > 0 and ((d < reach).sum(axis=1) == 1).all()
+    np.testing.assert_allclose(b.pyrolysis, want, rtol=1e-13)
 
 
 @pytest.mark.parametrize("max_rotation", [0.0, 1.2, 0.05])
@@ -65,7 +81,10 @@ def test_the_fast_sums_stay_within_their_tolerance():
     control = np.c_[rng.uniform(0, 1, (400, 2)), np.tile([-0.005, 0.005], 200)]
     particles = rng.uniform([0, 0, 0.01], [1, 1, 0.2], (3000, 3))
     temps = rng.uniform(100, 1000, 3000)
-    exact, fast = Bending(200, heat_fast=False), Bending(200, heat_fast=True, heat_tolerance=0.01)
+    # The octree's tolerance is eq 3's over every point (pyrolysis_range=0; within a range the
+    # sum is exact either way).
+    exact = Bending(200, heat_fast=False, pyrolysis_range=0.0)
+    fast = Bending(200, heat_fast=True, heat_tolerance=0.01, pyrolysis_range=0.0)
     for b in (exact, fast):
         b.add_particle_heat(control, particles, temps, 0.04)
         b.set_pyrolysis(control, particles[:500])
@@ -98,4 +117,4 @@ def test_bad_arrays_name_themselves():
 
 def test_defaults_are_the_documented_ones():
     assert DEFAULTS == dict(ct=1e-7, cp=1.0, alpha=1.0, beta=1e-3, d_min=0.005, max_rotation=0.4,
-                            heat_tolerance=0.01, heat_fast=True)
+                            heat_tolerance=0.01, heat_fast=True, pyrolysis_range=0.03)

@@ -10,7 +10,7 @@ import pytest
 import thinburn
 from thinburn._mesh_measures import EdgeStrain
 from thinburn.demo import build, default_scene
-from thinburn.scenes import A4, folded_sheet
+from thinburn.scenes import A4, folded_sheet, rect_sheet
 
 
 def _burn(seconds, **params):
@@ -103,8 +103,9 @@ def _burn_shell(V, F, src, seconds=40, **kw):
 def test_a_burning_shell_crumples_without_leaving_its_layer_or_stretching(shape):
     # 40 s of burning (a quarter to a third of the shell burnt). Every vertex stays between its
     # couples' bottom and top (measured 0.509-0.531 across the layer on the lantern, 0.510-0.557
-    # on the sphere), and unburnt edges keep their length: p99 of |l/L - 1| at most 0.46 % on the
-    # lantern and 0.15 % on the sphere, issue #12's 1 % for paper (13 % and 9.3 % before the curl
+    # on the sphere), and unburnt edges keep their length: p99 of |l/L - 1| at most 0.42 % on the
+    # lantern and 0.095 % on the sphere, issue #12's 1 % for paper (0.46 % and 0.15 % before
+    # pyrolysis had a 3 cm range, docs/dynamics.md §2; 13 % and 9.3 % before the curl
     # rolled across the front; 1.63 % and 0.46 % before it kept the shell's Gaussian curvature,
     # docs/dynamics.md §2 "Curved shells": the far side's faint curl barrelled the lantern and
     # squeezed its rims; the lantern 0.63 % before its rims had couples, docs/lattice.md).
@@ -113,28 +114,29 @@ def test_a_burning_shell_crumples_without_leaving_its_layer_or_stretching(shape)
     if shape == "lantern":
         V, F = S.cylinder(0.1, 0.3, 96, 36)
         sim, strain, layer, _ = _burn_shell(V, F, [0.1, 0.0, 0.15], floor=0.0, lattice=12)
-        assert strain < 0.0055
+        assert strain < 0.005
     else:
         V, F = S.icosphere(4, 0.1)
         sim, strain, layer, _ = _burn_shell(V, F, [0.1, 0.0, 0.0], pinned=np.flatnonzero(V[:, 2] > 0.098),
                                             lattice=12)
-        assert strain < 0.002
+        assert strain < 0.0012
     assert sim.geometry == "surface"
     assert 0.45 < layer[0] and layer[1] < 0.6
     assert (sim.cell_states() == 2).mean() > 0.2
 
 
-@pytest.mark.parametrize("turn, bound, near_bound", [(30.0, 0.003, 0.033), (150.0, 0.0082, 0.003)])
+@pytest.mark.parametrize("turn, bound, near_bound", [(30.0, 0.002, 0.036), (150.0, 0.0065, 0.003)])
 def test_a_folded_letter_burning_on_its_table_keeps_its_fold(turn, bound, near_bound):
     # The demo's letter (A4 folded across its middle by 30 degrees) and one folded back over
     # itself (150), lit at a corner of the lying half, 40 s at cells=48. Its fold is a crease
     # (docs/lattice.md, "Creases"): p99 of |l/L - 1| over unburnt edges, the most over the run,
-    # measured 0.26 % and 0.78 % (within 1 cm of the fold 3.15 % and 0.26 %); with one MLS window
+    # measured 0.18 % and 0.57 % (within 1 cm of the fold 3.39 % and 0.27 %); with one MLS window
     # across the fold 5.39 % and 1.86 % (37.6 % and 2.99 % near it). Before the rim's corners had
-    # couples (docs/lattice.md, "Rim couples"): 0.33 % and 0.65 % (1.43 % and 0.49 %). The 30
-    # degree letter has 10 couples at cells=48, 4 of them at its corners, and its fold's 3.15 %
-    # is one second (at 25 s; 0.65 % at 20 s, 0.50 % at 30 s); at cells=64 it is 0.46 % against
-    # 1.23 % before.
+    # couples (docs/lattice.md, "Rim couples") and pyrolysis a 3 cm range (docs/dynamics.md §2):
+    # 0.33 % and 0.65 % (1.43 % and 0.49 %); with the corners alone 0.26 % and 0.78 % (3.15 % and
+    # 0.26 %). The 30 degree letter has 10 couples at cells=48, 4 of them at its corners, and its
+    # fold's 3.15 % (corners alone) was one second (at 25 s; 0.65 % at 20 s, 0.50 % at 30 s); at
+    # cells=64 it was 0.46 % against 1.23 % before.
     V, F = folded_sheet(A4[0], A4[1], angle=turn, nx=43, ny=61)
     measure = EdgeStrain(V, F)
     E = measure.edges
@@ -171,17 +173,38 @@ def test_crease_angle_chooses_which_edges_are_hinges():
 
 
 def test_paper_lit_at_a_corner_curls_at_the_edge_and_stays_flat_elsewhere():
-    # Issue #12's default: over 40 s the unburnt paper rises at most 1.2 cm above the table
-    # (measured 1.08 cm) and its edges keep their length within 0.7 % (p99, measured 0.57 %
-    # with the B-spline embedding, 0.42 % with the trilinear one that kinked at control cells;
-    # 6.9 % at the old defaults, which rolled the sheet into a tube). Issue #12 asks for 1 %.
-    from thinburn.scenes import rect_sheet
-
+    # Issue #12's default: over 40 s the unburnt paper rises at most 1 cm above the table
+    # (measured 0.88 cm; 1.08 cm before pyrolysis had a 3 cm range, docs/dynamics.md §2) and its
+    # edges keep their length within 0.55 % (p99, measured 0.46 %; 0.57 % before the range;
+    # 0.42 % with the trilinear embedding that kinked at control cells; 6.9 % at the old
+    # defaults, which rolled the sheet into a tube). Issue #12 asks for 1 %. (How far from the
+    # fire the sheet lifts: `python scripts/curl_reach.py`.)
     V, F = rect_sheet()
     sim, strain, _, rise = _burn_shell(V, F, [0.0, 0.0, 0.0], floor=0.0)
     assert sim.geometry == "plane"
-    assert strain < 0.007
-    assert rise < 0.012
+    assert strain < 0.0055
+    assert rise < 0.010
+
+
+@pytest.mark.parametrize("reach, lit_bound, far_bound", [(0.03, (0.040, 0.055), (0.0, 0.0005)),
+                                                        (0.0, (0.050, 0.065), (0.030, 0.040))])
+def test_a_sheet_lit_at_a_corner_keeps_its_far_end_on_the_table(reach, lit_bound, far_bound):
+    # The artists' trial: A4 paper of 61 x 61 vertices 0.5 mm above its table, lit at a corner,
+    # spreading at 25 mm/s for 5 s (cells=64): "the unburnt far end curls up" 34 mm, the sheet a
+    # U touching its table nowhere. Eq 3 summed every burning cell, and the curled corner's
+    # cells, lifted above the sheet's plane, sat nearer every couple's top than its bottom.
+    # With pyrolysis counting the cells within 3 cm (the default, docs/dynamics.md §2): the far
+    # corner stays on the table (measured 0.0 mm) while the lit corner curls up 47.2 mm; counting
+    # all of them (pyrolysis_range=0, the paper's reading) 34.4 mm and 57.0 mm
+    # (`python scripts/curl_reach.py`).
+    V, F = rect_sheet(0.21, 0.297, nx=61, ny=61, z=0.0005)
+    mat = thinburn.MATERIALS["paper"].with_(V0=25.0)
+    sim = thinburn.Simulation(V, F, material=mat, cells=64, floor=0.0, pyrolysis_range=reach)
+    sim.ignite((0.0, 0.0, 0.0005), radius=0.02)
+    sim.run(5.0, dt=1 / 24)
+    X = sim.vertex_positions()
+    assert lit_bound[0] < X[0, 2] < lit_bound[1]
+    assert far_bound[0] <= X[-1, 2] < far_bound[1]
 
 
 def test_a_stack_of_sheets_closer_than_its_couples_keeps_each_sheet_in_its_own_lattice():
@@ -233,7 +256,6 @@ def _pleated_curtain(lattice=None, wind=0.0):
     # A half-size curtain (0.5 m x 0.7 m) with 1 cm pleats 10 cm apart, pinned along its top,
     # hanging for 2 s at 64 cells (in still air or a wind across it): the worst p99 of
     # |l/L - 1| over its mesh edges.
-    from thinburn.scenes import rect_sheet
 
     v, f = rect_sheet(0.5, 0.7, nx=51, ny=71, vertical=True, z=0.05)
     v[:, 1] = 0.01 * np.sin(2 * np.pi * v[:, 0] / 0.1)

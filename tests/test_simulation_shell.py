@@ -186,16 +186,20 @@ def test_pyrolysis_does_not_depend_on_the_grid(a4):
     # Eq 3 sums over burning cells; weighted by their share of a paper (128²) cell, the same
     # burning area gives the same field at any N (the lattice is held at 9 and flat, crumple
     # off, so the targets are the same). The lit disc's area itself differs by 8 % between the
-    # grids, so the field is compared per unit burning area: measured within 0.1 %.
-    per_area = []
-    for N in (64, 128, 256):
-        sim = thinburn.Simulation(*a4, cells=N, lattice=9, floor=0.0, crumple_gain=0.0, **QUIET)
-        sim.ignite((0.05, 0.05, 0.0), radius=0.02)
-        sim.run(2.0, dt=1 / 24)
-        burning_paper_cells = (sim.cell_states() == 1).sum() * (128 / N) ** 2
-        per_area.append(sim.pyrolysis().mean() / burning_paper_cells)
-    assert min(per_area) > 0
-    assert max(per_area) / min(per_area) < 1.005
+    # grids, so the field is compared per unit burning area: measured within 0.1 % when every
+    # burning cell counts (pyrolysis_range=0), within 1.6 % at the default 3 cm range, where
+    # which cells of each grid fall inside the range adds its own rounding.
+    for reach, bound in ((0.0, 1.005), (0.03, 1.02)):
+        per_area = []
+        for N in (64, 128, 256):
+            sim = thinburn.Simulation(*a4, cells=N, lattice=9, floor=0.0, crumple_gain=0.0,
+                                      pyrolysis_range=reach, **QUIET)
+            sim.ignite((0.05, 0.05, 0.0), radius=0.02)
+            sim.run(2.0, dt=1 / 24)
+            burning_paper_cells = (sim.cell_states() == 1).sum() * (128 / N) ** 2
+            per_area.append(sim.pyrolysis().mean() / burning_paper_cells)
+        assert min(per_area) > 0
+        assert max(per_area) / min(per_area) < bound
 
 
 def test_wake_hold_cuts_redone_steps_on_a_held_cloth():
@@ -222,7 +226,9 @@ def test_heat_reaches_the_lattice_and_bends_it(a4):
     v, f = a4
     sim = thinburn.Simulation(v, f, cells=48, floor=0.0)
     sim.ignite((0.105, 0.15, 0.0), radius=0.01)
-    sim.run(6.0, dt=1 / 24)
+    # 9 s: the fire (3.5 mm/s) comes within the 3 cm pyrolysis range of the couples around its
+    # centre (5 cm away): the sheet moves 2.5 mm (5 um at 6 s).
+    sim.run(9.0, dt=1 / 24)
     heat = sim.heat()
     assert heat.max() > 0 and np.all(np.isfinite(heat))
     # Flames sit on the upper face: the top layer gets more heat than the bottom where it burns.
@@ -248,13 +254,14 @@ def test_symmetric_input_gives_symmetric_output():
     # pyrolysis, D and motion are mirror-symmetric about x = w/2. The lattice dynamics alone is
     # symmetric to 1e-12 (tests/test_dynamics.py); here the fire front accepts mirror cells in
     # index order within a step while the shape they read moves, so the coupled result is
-    # symmetric to a stated 5 % of the motion (measured: 0.07 %). beta = 3e-4 keeps the bend
-    # short of a fold: at the preset's 1e-3 this 4 x 4 lattice folds in two, and which way it
-    # buckles is a bifurcation that rounding decides.
+    # symmetric to a stated 5 % of the motion (measured: 0.64 % of 5.5 mm). beta = 3e-4 keeps
+    # the bend short of a fold: at the preset's 1e-3 this 4 x 4 lattice folds in two, and which
+    # way it buckles is a bifurcation that rounding decides. 8 s: the couples nearest the centre
+    # are 4.7 cm from it, and pyrolysis reaches 3 cm (at 4 s the sheet had moved 1.2 um).
     v, f = rect_sheet(0.2, 0.2, nx=21, ny=21)
     sim = thinburn.Simulation(v, f, cells=40, floor=0.0, particle_birth_rate=0.0, beta=3e-4, **QUIET)
     sim.ignite((0.1, 0.1, 0.0), radius=0.012)
-    sim.run(4.0, dt=1 / 24)
+    sim.run(8.0, dt=1 / 24)
     x = sim.vertex_positions()
     mirror = np.lexsort((v[:, 1], 0.2 - v[:, 0]))
     order = np.lexsort((v[:, 1], v[:, 0]))

@@ -26,7 +26,7 @@ void require_rows(const RowMatX3& m, Eigen::Index rows, const char* name) {
 void define_bending(py::module_& m) {
   py::class_<Bending>(m, "Bending",
                       "Heat (eq 2), pyrolysis (eq 3) and the rotation D (eqs 4-6) of a lattice's "
-                      "couples; keyword arguments ct, cp, alpha, beta, d_min, max_rotation, "
+                      "couples; keyword arguments ct, cp, alpha, beta, d_min, pyrolysis_range, max_rotation, "
                       "heat_tolerance, heat_fast (docs/bending.md).")
       .def(py::init([](int couples, const py::kwargs& kw) {
              if (couples < 1) throw py::value_error("couples must be >= 1, got " + std::to_string(couples));

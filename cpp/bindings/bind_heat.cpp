@@ -12,8 +12,9 @@ namespace thinburn::bind {
 namespace {
 
 KernelSumOptions make_options(int power, double d_min, const std::string& method,
-                              double tolerance) {
+                              double tolerance, double cutoff = 0.0) {
   KernelSumOptions opt;
+  opt.cutoff = cutoff;
   opt.power = power;
   opt.d_min = d_min;
   if (method == "direct") {
@@ -40,8 +41,8 @@ void define_heat(py::module_& m) {
       "kernel_sum",
       [](const RowMatX3& sources, const Eigen::VectorXd& weights, const RowMatX3& targets,
          int power, double d_min, const std::string& method, double tolerance,
-         bool return_bound) {
-        const KernelSumOptions opt = make_options(power, d_min, method, tolerance);
+         bool return_bound, double cutoff) {
+        const KernelSumOptions opt = make_options(power, d_min, method, tolerance, cutoff);
         Eigen::VectorXd out, bound;
         {
           py::gil_scoped_release release;
@@ -51,9 +52,10 @@ void define_heat(py::module_& m) {
       },
       py::arg("sources"), py::arg("weights"), py::arg("targets"), py::arg("power") = 2,
       py::arg("d_min") = 0.01, py::arg("method") = "fast", py::arg("tolerance") = 0.01,
-      py::arg("return_bound") = false,
+      py::arg("return_bound") = false, py::arg("cutoff") = 0.0,
       "out(j) = sum_i w(i) / (|targets(j) - sources(i)| + d_min)^power, direct or fast; with "
-      "return_bound, also a per-target bound on |out(j) - exact(j)|.");
+      "return_bound, also a per-target bound on |out(j) - exact(j)|; with cutoff > 0 the kernel "
+      "minus its value at the cutoff, over the sources within it.");
 
   py::class_<KernelSummer>(m, "KernelSummer",
                            "An octree over weighted sources, built once and evaluated at many "
@@ -108,8 +110,8 @@ void define_heat(py::module_& m) {
   m.def(
       "pyrolysis",
       [](const RowMatX3& points, const RowMatX3& vertices, double cp, double d_min,
-         const std::string& method, double tolerance, bool return_bound) {
-        const KernelSumOptions opt = make_options(1, d_min, method, tolerance);
+         const std::string& method, double tolerance, bool return_bound, double cutoff) {
+        const KernelSumOptions opt = make_options(1, d_min, method, tolerance, cutoff);
         Eigen::VectorXd out, bound;
         {
           py::gil_scoped_release release;
@@ -119,6 +121,8 @@ void define_heat(py::module_& m) {
       },
       py::arg("ignition_points"), py::arg("vertices"), py::arg("cp"), py::arg("d_min") = 0.01,
       py::arg("method") = "fast", py::arg("tolerance") = 0.01, py::arg("return_bound") = false,
-      "Pyrolysis of each vertex from ignition points, eq (3): Cp * sum_i 1 / (dis_ij + d_min).");
+      py::arg("cutoff") = 0.0,
+      "Pyrolysis of each vertex from ignition points, eq (3): Cp * sum_i 1 / (dis_ij + d_min); "
+      "with cutoff > 0, over the points within it, minus 1 / (cutoff + d_min) each.");
 }
 }  // namespace thinburn::bind

@@ -17,7 +17,7 @@ from . import _core
 from . import _validate as V
 from .params import names
 
-KEYS = names("bending")  # ct, cp, alpha, beta, d_min, max_rotation, heat_tolerance, heat_fast
+KEYS = names("bending")  # ct, cp, alpha, beta, d_min, pyrolysis_range, max_rotation, heat_tolerance, heat_fast
 DEFAULTS = dict(_core.Bending(1).params)
 
 

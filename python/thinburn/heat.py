@@ -99,7 +99,7 @@ def _options(power, d_min, method, tolerance, return_bound):
 
 
 def kernel_sum(sources, weights, targets, power=2, d_min=0.01, method="fast", tolerance=0.01,
-               return_bound=False):
+               return_bound=False, cutoff=0.0):
     """``out[j] = sum_i weights[i] / (|targets[j] - sources[i]| + d_min)**power``.
 
     Args:
@@ -111,16 +111,20 @@ def kernel_sum(sources, weights, targets, power=2, d_min=0.01, method="fast", to
         method: "direct" (every pair) or "fast" (octree with a proven error bound).
         tolerance: in (0, 1); with "fast" every out[j] is within this relative error.
         return_bound: also return a per-target bound on |out[j] - exact[j]| (zero for direct).
+        cutoff: m, >= 0. 0: every source counts. > 0: the kernel minus its value at the cutoff,
+            summed exactly over the sources closer than the cutoff (method and tolerance unused):
+            differences between targets keep the sources within the cutoff of both.
 
     Returns:
         out, or (out, bound) with return_bound.
     """
     power, d_min, method, tolerance = _options(power, d_min, method, tolerance, return_bound)
+    cutoff = _real("cutoff", cutoff, low=0.0)
     src = _points("sources", sources)
     w = _vector("weights", weights, src.shape[0])
     tgt = _points("targets", targets)
     return _core.kernel_sum(src, w, tgt, power=power, d_min=d_min, method=method,
-                            tolerance=tolerance, return_bound=return_bound)
+                            tolerance=tolerance, return_bound=return_bound, cutoff=cutoff)
 
 
 def particle_heat(particles, temperatures, vertices, ct, dt, d_min=0.01, method="fast",
@@ -142,18 +146,21 @@ def particle_heat(particles, temperatures, vertices, ct, dt, d_min=0.01, method=
 
 
 def pyrolysis(ignition_points, vertices, cp, d_min=0.01, method="fast", tolerance=0.01,
-              return_bound=False):
+              return_bound=False, cutoff=0.0):
     """Pyrolysis of each vertex from the ignition points, eq (3):
-    ``cp * sum_i 1 / (|vertices[j] - ignition_points[i]| + d_min)``.
+    ``cp * sum_i 1 / (|vertices[j] - ignition_points[i]| + d_min)``; with ``cutoff`` > 0 over
+    the points closer than it, each less ``1 / (cutoff + d_min)`` (the Simulation's
+    ``pyrolysis_range``, docs/dynamics.md §2).
 
     cp >= 0. Other arguments as in kernel_sum.
     """
     _, d_min, method, tolerance = _options(1, d_min, method, tolerance, return_bound)
     cp = _real("cp", cp, low=0.0)
+    cutoff = _real("cutoff", cutoff, low=0.0)
     src = _points("ignition_points", ignition_points)
     tgt = _points("vertices", vertices)
     return _core.pyrolysis(src, tgt, cp=cp, d_min=d_min, method=method, tolerance=tolerance,
-                           return_bound=return_bound)
+                           return_bound=return_bound, cutoff=cutoff)
 
 
 class KernelSummer:

@@ -133,7 +133,8 @@ class Simulation:
           ``ash_strength`` (share of the lattice's stiffness that burnt sheet keeps, 0.1: ash
           holds little together; docs/materials.md);
         * the bending (eqs 2-6): ``ct``, ``alpha``, ``beta``, ``d_min``, ``max_rotation``,
-          ``heat_tolerance``, ``heat_fast``;
+          ``pyrolysis_range`` (m, 0.03: eq 3 counts the burning cells this close; 0 counts
+          all, the paper's reading), ``heat_tolerance``, ``heat_fast``;
         * the motion: ``k_thickness``, ``k_transverse``, ``stiffness_unit``,
           ``flexural_rigidity`` (N m, default the material's: the sheet bends with it, not with
           the lattice's own layers, docs/dynamics.md §1.1), ``strain_limit`` (default the
