@@ -609,6 +609,10 @@ def collision_warnings(view_layer, sheet_name: str, shell: bool) -> list:
     return out
 
 
+# m: a collider's Outer thickness above this is named in the bake's report, since the sheet rests
+# that far off it (Blender's default is 0.02 m; docs/blender.md, "Collision objects").
+OUTER_NOTICE = 0.005
+
 # What a ThinBurn sheet reads of Blender's Collision physics (docs/blender.md, "Collision
 # objects"); the panel says it, so that the report need not warn about settings left alone.
 COLLISION_NOTE = ("Collision objects: ThinBurn uses their Friction and Outer thickness; it "

@@ -59,6 +59,21 @@ def test_an_open_collision_mesh_is_warned_about_and_left_out(addon, tmp_path):
     assert any("Ground" in w and "not a closed mesh" in w for w in job.warnings), job.warnings
 
 
+def test_a_thick_outer_is_named_in_the_report(addon, tmp_path):
+    """The artists' trial: paper on a Collision table with Blender's default Outer thickness
+    (2 cm) hovered 3 cm above it and nothing said why. The report names the Outer thickness of
+    a collider above 5 mm, and the setting that changes it; not at 1 mm (the draping scene)."""
+    sheet, sphere = _scene(tmp_path, frames=2)
+    job = addon.job.BakeJob(bpy.context, sheet)
+    job.cancel()
+    assert not any("Outer thickness (" in w for w in job.warnings), job.warnings
+    sphere.collision.thickness_outer = 0.02
+    job = addon.job.BakeJob(bpy.context, sheet)
+    job.cancel()
+    named = [w for w in job.warnings if "Outer thickness (20 mm)" in w]
+    assert len(named) == 1 and "'Sphere'" in named[0] and "Softbody & Cloth" in named[0], job.warnings
+
+
 def test_blender_default_collision_settings_are_not_warned_about(addon):
     """A new Collision modifier has Damping 0.1 and Single Sided on; warning about those warned
     on every bake with a Collision object. The panel's note says what is used instead."""
@@ -126,6 +141,7 @@ def test_a_floor_object_with_collision_is_the_floor_only(addon, tmp_path):
     job.run()
     assert job.colliders == []
     assert any("Floor Object and has Collision" in w for w in job.warnings), job.warnings
+    assert not any("Outer thickness (" in w for w in job.warnings), job.warnings  # not a collider now
     _, data = addon.cache.read_pc2(cache_file(tmp_path / "cache", "Sheet.pc2"))
     # Measured: 0.5 mm (the floor's margin) from frame 2 on; 26.2 mm with the cube a collider too.
     assert abs(float(data[-1][:, 2].min()) - 0.0005) < 2e-4
