@@ -5,7 +5,8 @@ and whose geometry nodes ("ThinBurn Fire") turn the cached points into flames. B
 in Cycles and EEVEE without the add-on:
 
 * "ThinBurn Fire <sheet>": the flames, a volume. Every hot particle becomes a tongue of a few
-  puffs that rises *Flame Height* above it and cools towards its tip; Points to Volume gives
+  puffs that rises up to *Flame Height* above it (a height of its own) and cools and narrows
+  towards its tip; Points to Volume gives
   the ``density`` grid, and Field to Grid samples the nearest puff's ``tb_temperature``
   (colour temperature, K) and ``tb_flame`` (emission weight) onto grids of those names.
   Material "ThinBurn Fire": blackbody emission, seen by the camera only.
@@ -32,6 +33,8 @@ LIGHT_MATERIAL = "ThinBurn Fire Light"
 ATTR_TEMPERATURE = "tb_particle_temperature"  # K above ambient, as the core gives it
 ATTR_KELVIN = "tb_temperature"  # colour temperature, K (not "temperature": Cycles' own name)
 ATTR_FLAME = "tb_flame"  # emission weight
+ATTR_LICK = "tb_lick"  # a particle's tongue height, of Flame Height * T/T0
+ATTR_RADIUS = "tb_radius"  # a flame puff's radius, m
 
 
 def fire_object_name(obj) -> str:
@@ -63,7 +66,7 @@ def _inputs(tree):
     interface_socket(tree, "Geometry", "OUTPUT", "NodeSocketGeometry")
 
 
-VERSION = 3  # of the groups and materials below; older ones (from an earlier add-on) are renamed
+VERSION = 4  # of the groups and materials below; older ones (from an earlier add-on) are renamed
 
 
 def _current(collection, name):
@@ -124,8 +127,26 @@ def fire_group():
     set_input(store, "Name", ATTR_TEMPERATURE)
     L(gi.outputs["Geometry"], store.inputs["Geometry"])
     L(split.outputs["X"], socket(store.inputs, "Value"))
+    # Per particle slot (the cache's rows keep a particle's slot while it lives): its tongue's
+    # height, LICK_MIN..LICK_MAX of Flame Height, mostly short (u^2), and its puffs' radius.
+    lick = node(tree, "FunctionNodeRandomValue", -800, 500, data_type="FLOAT")  # 0..1, ID = slot
+    skew = node(tree, "ShaderNodeMath", -650, 500, operation="POWER")
+    L(socket(lick.outputs, "Value_001"), skew.inputs[0])  # the float output ("Value" is the vector's)
+    skew.inputs[1].default_value = 2.0
+    spread = node(tree, "ShaderNodeMath", -500, 500, operation="MULTIPLY_ADD")
+    L(skew.outputs[0], spread.inputs[0])
+    spread.inputs[1].default_value = LICK_MAX - LICK_MIN
+    spread.inputs[2].default_value = LICK_MIN
+    store_lick = node(tree, "GeometryNodeStoreNamedAttribute", -450, 250, data_type="FLOAT", domain="POINT")
+    set_input(store_lick, "Name", ATTR_LICK)
+    L(store.outputs[0], store_lick.inputs["Geometry"])
+    L(spread.outputs[0], socket(store_lick.inputs, "Value"))
+    store_r = node(tree, "GeometryNodeStoreNamedAttribute", -300, 250, data_type="FLOAT", domain="POINT")
+    set_input(store_r, "Name", ATTR_RADIUS)
+    L(store_lick.outputs[0], store_r.inputs["Geometry"])
+    L(gi.outputs["Radius"], socket(store_r.inputs, "Value"))
     points = node(tree, "GeometryNodeMeshToPoints", -400, 100)
-    L(store.outputs[0], points.inputs["Mesh"])
+    L(store_r.outputs[0], points.inputs["Mesh"])
     L(keep.outputs[0], points.inputs["Selection"])
     L(gi.outputs["Radius"], points.inputs["Radius"])
     temp = node(tree, "GeometryNodeInputNamedAttribute", -400, -200, data_type="FLOAT")
@@ -146,8 +167,13 @@ def fire_group():
     rise2 = node(tree, "ShaderNodeMath", 400, -250, operation="MULTIPLY")
     L(rise.outputs[0], rise2.inputs[0])
     L(rel.outputs[0], rise2.inputs[1])
+    lick_now = node(tree, "GeometryNodeInputNamedAttribute", 200, -650, data_type="FLOAT")
+    set_input(lick_now, "Name", ATTR_LICK)
+    rise3 = node(tree, "ShaderNodeMath", 500, -400, operation="MULTIPLY")
+    L(rise2.outputs[0], rise3.inputs[0])
+    L(lick_now.outputs["Attribute"], rise3.inputs[1])
     up = node(tree, "ShaderNodeCombineXYZ", 600, -250)
-    L(rise2.outputs[0], up.inputs["Z"])
+    L(rise3.outputs[0], up.inputs["Z"])
     lift = node(tree, "GeometryNodeSetPosition", 600, 100)
     L(dup.outputs["Geometry"], lift.inputs["Geometry"])
     L(up.outputs[0], lift.inputs["Offset"])
@@ -163,8 +189,20 @@ def fire_group():
     set_input(tongue, "Name", ATTR_TEMPERATURE)
     L(lift.outputs[0], tongue.inputs["Geometry"])
     L(cooled.outputs[0], socket(tongue.inputs, "Value"))
+    # and narrows: its puffs' radius Radius * (1 - TAPER * along), so it ends in a tip
+    narrow = node(tree, "ShaderNodeMath", 600, -650, operation="MULTIPLY_ADD")
+    L(along.outputs[0], narrow.inputs[0])
+    narrow.inputs[1].default_value = -TAPER
+    narrow.inputs[2].default_value = 1.0
+    tip_r = node(tree, "ShaderNodeMath", 800, -650, operation="MULTIPLY")
+    L(narrow.outputs[0], tip_r.inputs[0])
+    L(gi.outputs["Radius"], tip_r.inputs[1])
+    tapered = node(tree, "GeometryNodeStoreNamedAttribute", 900, 250, data_type="FLOAT", domain="POINT")
+    set_input(tapered, "Name", ATTR_RADIUS)
+    L(tongue.outputs[0], tapered.inputs["Geometry"])
+    L(tip_r.outputs[0], socket(tapered.inputs, "Value"))
     both = node(tree, "GeometryNodeJoinGeometry", 1000, 100)  # the particles and their tongues
-    L(tongue.outputs[0], both.inputs[0])
+    L(tapered.outputs[0], both.inputs[0])
     L(points.outputs[0], both.inputs[0])
     # what the shaders read: tb_temperature = the colour temperature in kelvin, tb_flame = the
     # emission weight Intensity * (T / T0)^4 (Stefan-Boltzmann)
@@ -201,7 +239,9 @@ def fire_group():
     L(flames, to_volume.inputs["Points"])
     set_input(to_volume, "Resolution Mode", "Size")
     L(gi.outputs["Voxel Size"], to_volume.inputs["Voxel Size"])
-    L(gi.outputs["Radius"], to_volume.inputs["Radius"])
+    puff_r = node(tree, "GeometryNodeInputNamedAttribute", 1400, 550, data_type="FLOAT")
+    set_input(puff_r, "Name", ATTR_RADIUS)
+    L(puff_r.outputs["Attribute"], to_volume.inputs["Radius"])
     set_input(to_volume, "Density", 1.0)
     density = node(tree, "GeometryNodeGetNamedGrid", 1800, 400, data_type="FLOAT")
     L(to_volume.outputs[0], density.inputs["Volume"])
@@ -260,7 +300,9 @@ FLAME_RADIUS = 0.010    # m, a flame puff around one particle
 FLAME_HEIGHT = 0.06     # m, a tongue's rise above a particle at FLAME_K
 VOXEL_SIZE = 0.0025     # m
 MIN_TEMPERATURE = 350.0  # K above ambient: cooler particles barely glow (weight < 0.03)
-STREAK = 5              # puffs per tongue, the particle's own included
+STREAK = 9              # puffs per tongue, the particle's own included
+LICK_MIN, LICK_MAX = 0.3, 1.6  # a tongue's height, of Flame Height * T/T0: min + (max - min) u^2
+TAPER = 0.8             # a tongue's puffs shrink to 1 - TAPER * along of Radius towards its tip
 FLAME_STRENGTH = 50.0   # volume emission of a flame point at FLAME_K and Intensity 1
 LICK_SCALE = (60.0, 60.0, 20.0)  # 1/m: the noise that shapes the tongues
 LIGHT_STRENGTH = 1.0    # surface emission of a light sphere at FLAME_K and Intensity 1

@@ -67,12 +67,16 @@ def build_scene(cache: Path, size: float, n: int, frames: int, own_material: boo
     return sheet
 
 
-def camera_and_world(size: float, width: int, samples: int):
+def camera_and_world(size: float, width: int, samples: int, elevation: float = 39.29):
+    """A camera 1.42 sheet sizes from the sheet's centre, `elevation` degrees above the table
+    (39.29: the docs' pictures; a few degrees: the flames from the side), aimed 1.29 degrees
+    above the centre."""
     import bpy
     scene = bpy.context.scene
     cam = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
-    cam.location = (0.0, -1.1 * size, 0.9 * size)
-    cam.rotation_euler = (math.radians(52), 0.0, 0.0)
+    e = math.radians(elevation)
+    cam.location = (0.0, -1.42 * size * math.cos(e), 1.42 * size * math.sin(e))
+    cam.rotation_euler = (math.radians(91.29 - elevation), 0.0, 0.0)
     cam.data.lens = 32
     scene.collection.objects.link(cam)
     scene.camera = cam
@@ -123,6 +127,8 @@ def main(argv=None) -> int:
                     help="hold the sheet this high above the table (Crumple off), m")
     ap.add_argument("--engine", default="CYCLES", choices=["CYCLES", "BLENDER_EEVEE"])
     ap.add_argument("--view", default="AgX", help="the scene's view transform (AgX: Blender's default)")
+    ap.add_argument("--elevation", type=float, default=39.29,
+                    help="the camera's height above the table, degrees (6: the flames from the side)")
     ap.add_argument("--mantaflow", type=int, default=0, metavar="RES",
                     help="also Add Mantaflow Fire at this Smoke Resolution and bake it (0: off)")
     ap.add_argument("--looks", nargs="*", default=[],
@@ -145,7 +151,7 @@ def main(argv=None) -> int:
             sheet.thinburn.mantaflow_resolution = args.mantaflow
             sheet.thinburn.frame_end = max(args.frames)
             bpy.ops.thinburn.add_mantaflow_fire(bake=True)
-        camera_and_world(size, args.width, args.samples)
+        camera_and_world(size, args.width, args.samples, args.elevation)
         bpy.context.scene.view_settings.view_transform = args.view
         bpy.context.scene.render.engine = args.engine
         looks = [None] + [tuple(float(v) for v in look.split(":")) for look in args.looks]

@@ -126,8 +126,9 @@ def test_fire_object_alone_glows_warm_at_the_burning_edge(addon, tmp_path):
     hot = lum > background + 0.1
     print("fire alone: background", background, "hot pixels", int(hot.sum()),
           "mean rgb there", rgb[hot].mean(axis=0))
-    # measured: background 0.247, 443 hot pixels of 3072, mean rgb there (0.75, 0.38, 0.25),
-    # mean luminance 0.45
+    # measured: background 0.247, 599 hot pixels of 3072, mean rgb there (0.81, 0.45, 0.26)
+    # (443 and (0.75, 0.38, 0.25) before the tongues had heights of their own and tapered,
+    # docs/blender.md "Flames")
     assert hot.sum() >= 150, (tmp_path, int(hot.sum()))
     red, green, blue = rgb[hot].mean(axis=0)
     assert red > 2.0 * blue and red > 1.3 * green, (tmp_path, red, green, blue)
@@ -145,7 +146,7 @@ def test_flames_light_the_sheet(addon, tmp_path):
     near = _annulus(h, w, 0.06, 0.08)  # unburnt paper just outside the ring of fire
     warm, grey = lit[near].mean(axis=0), dark[near].mean(axis=0)
     print("flame light: rgb near the fire", warm, "without the light", grey)
-    # measured: (0.40, 0.21, 0.16) lit against (0.25, 0.22, 0.20) unlit
+    # measured: (0.41, 0.24, 0.18) lit against (0.26, 0.23, 0.21) unlit
     assert warm[0] - grey[0] > 0.1, (tmp_path, warm, grey)
     assert warm[0] > 1.5 * warm[2], (tmp_path, warm)
     assert sheet.hide_render is False
@@ -175,13 +176,15 @@ def test_eevee_lamps_light_the_sheet_near_the_fire_and_cycles_ignores_them(addon
     warm, grey = lit[near].mean(axis=0), dark[near].mean(axis=0)
     gain_far = lit[far].mean(axis=0) - dark[far].mean(axis=0)
     print("EEVEE lamps: near", warm, "without", grey, "far gain", gain_far, "Cycles near", cycles)
-    # measured (bpy 5.0.1, software GL): near (0.416, 0.294, 0.216) lit against (0.236, 0.221,
-    # 0.206) dark, a red gain of 0.18; far gain (0.021, 0.007, 0.000); Cycles with the lamps on
-    # (their light nodes emit 0) and its flame light off: (0.246, 0.224, 0.206), as with no light
+    # measured (bpy 5.0.1, software GL): near (0.413, 0.293, 0.216) lit against (0.238, 0.222,
+    # 0.206) dark, a red gain of 0.18; far gain (0.016, 0.006, 0.000); Cycles with the lamps on
+    # (their light nodes emit 0) and its flame light off: (0.264, 0.230, 0.206), as with no light
+    # (test_flames_light_the_sheet's unlit render; (0.246, 0.224, 0.206) when the sheet's unburnt
+    # part still curled up round the fire, before pyrolysis had a 3 cm range)
     assert warm[0] - grey[0] > 0.1, (tmp_path, warm, grey)
     assert warm[0] - grey[0] > 3 * (warm[2] - grey[2]), (tmp_path, warm, grey)  # a warm light
     assert gain_far[0] < 0.25 * (warm[0] - grey[0]), (tmp_path, gain_far)
-    np.testing.assert_allclose(cycles, [0.246, 0.224, 0.206], atol=0.01)
+    np.testing.assert_allclose(cycles, [0.264, 0.230, 0.206], atol=0.01)
 
 
 def _own_material_sheet(tmp_path, size=0.2):
