@@ -134,10 +134,11 @@ ParticleSystem::ParticleSystem(const ParticleParams& params) : params_(params) {
 }
 
 void ParticleSystem::emit(const RowMatX3& pos, const RowMatX3& normal,
-                          const Eigen::VectorXd& length, double dt) {
+                          const Eigen::VectorXd& length, double dt, const Eigen::VectorXd* side) {
   const Eigen::Index k = pos.rows();
   require(normal.rows() == k, "normal must have as many rows as pos");
   require(length.size() == k, "length must have one entry per row of pos");
+  require(!side || side->size() == k, "side must have one entry per row of pos");
   require(std::isfinite(dt) && dt >= 0.0, "dt must be finite and >= 0");
   require(pos.allFinite(), "pos must be finite");
   require(normal.allFinite(), "normal must be finite");
@@ -161,16 +162,25 @@ void ParticleSystem::emit(const RowMatX3& pos, const RowMatX3& normal,
         dropped_ += n - j;
         break;
       }
-      birth(p, nn, length(i), dt);
+      birth(p, nn, length(i), dt, side ? (*side)(i) : 0.0);
     }
   }
 }
 
-void ParticleSystem::birth(const Eigen::Vector3d& p, const Eigen::Vector3d& n, double length, double dt) {
+void ParticleSystem::push_out(int i, const Eigen::Vector3d& x, const Eigen::Vector3d& n) {
+  require(i >= 0 && i < count_, "push_out: no live particle of that index");
+  pos_.row(i) = x.transpose();
+  const double vn = vel_.row(i).dot(n.transpose());
+  if (vn < 0.0) vel_.row(i) -= vn * n.transpose();
+}
+
+void ParticleSystem::birth(const Eigen::Vector3d& p, const Eigen::Vector3d& n, double length, double dt,
+                           double given_side) {
   const std::uint64_t id = next_id_++;
   Stream rng(hash_key(params_.seed, kTagBirth, id, 0));
   double side = n.z() >= 0.0 ? 1.0 : -1.0;
   if (std::abs(n.z()) < params_.vertical_band) side = (id & 1U) ? -1.0 : 1.0;
+  if (given_side != 0.0) side = given_side > 0.0 ? 1.0 : -1.0;
   Eigen::Vector3d t1, t2;
   tangents(n, t1, t2);
   const double a = (rng.uniform() - 0.5) * length, b = (rng.uniform() - 0.5) * length;

@@ -59,11 +59,18 @@ class ParticleSystem {
   /// (both sides alternating when |n.z| < vertical_band). Each is born at a uniform time within
   /// the coming step: its age starts at minus that delay (in (-dt, 0]) and the next step(dt)
   /// carries it through the rest of the step only.
-  void emit(const RowMatX3& pos, const RowMatX3& normal, const Eigen::VectorXd& length, double dt);
+  /// @param side if given, per emitter: +1 or -1 to be born on that side of its normal (the
+  /// outside of a closed shell), 0 for the rule above (the upper side; both near vertical)
+  void emit(const RowMatX3& pos, const RowMatX3& normal, const Eigen::VectorXd& length, double dt,
+            const Eigen::VectorXd* side = nullptr);
 
   /// @brief Advance all live particles by dt in a wind (m/s): exact exponential integration of
   /// cooling, drag and buoyancy, then an Ornstein-Uhlenbeck turbulent kick; age; kill the dead.
   void step(double dt, const Eigen::Vector3d& wind);
+
+  /// @brief Move live particle i to x and take off its velocity's component against the unit
+  /// normal n (it met a surface it must not cross: OutsideKeeper).
+  void push_out(int i, const Eigen::Vector3d& x, const Eigen::Vector3d& n);
 
   /// @brief Number of live particles.
   int count() const { return count_; }
@@ -92,7 +99,7 @@ class ParticleSystem {
   std::uint64_t steps() const { return steps_; }
 
  private:
-  void birth(const Eigen::Vector3d& p, const Eigen::Vector3d& n, double length, double dt);
+  void birth(const Eigen::Vector3d& p, const Eigen::Vector3d& n, double length, double dt, double side);
   void compact();
 
   ParticleParams params_;

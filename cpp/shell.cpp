@@ -758,8 +758,9 @@ void Shell::hand_over_masses_and_strength() {
 void Shell::step(double dt, const ShellSources& src, const Eigen::Vector3d& wind) {
   {
     PhaseTimer timer(times_, Phase::Particles);
-    if (src.emit_pos->rows() > 0) particles_->emit(*src.emit_pos, *src.emit_normal, *src.emit_len, dt);
+    if (src.emit_pos->rows() > 0) particles_->emit(*src.emit_pos, *src.emit_normal, *src.emit_len, dt, src.emit_side);
     particles_->step(dt, wind);
+    keep_flames_outside(dt);
     particle_pos_ = particles_->positions();
     particle_temp_ = particles_->temperatures();
   }
@@ -812,6 +813,9 @@ void Shell::find_pieces() {
   // A surface cell's piece: that of the couple carrying the largest share of it (a grid
   // lattice is one piece: cell_piece_ stays empty).
   if (!control_) return;
+  outside_keeper_ = std::make_unique<OutsideKeeper>(piece_of_, control_->cells().on_boundary(), lattice_->rest(),
+                                                    control_->spacing());
+  if (!outside_keeper_->any()) outside_keeper_.reset();
   constexpr int S = SurfaceEmbedding::kStencil;
   cell_piece_.resize(surface_cells_.size());
   for (Eigen::Index cell = 0; cell < surface_cells_.size(); ++cell) {
@@ -853,6 +857,16 @@ void Shell::update_piece_rotations() {
     if ((svd.matrixV() * svd.matrixU().transpose()).determinant() < 0) D(2, 2) = -1.0;
     piece_rotation_[p] = svd.matrixV() * D * svd.matrixU().transpose();
   }
+}
+
+void Shell::keep_flames_outside(double dt) {
+  // Half a lattice thickness out: the flames' side of the layer, as where they are born.
+  if (!outside_keeper_) return;
+  const int C = static_cast<int>(piece_of_.size());
+  couple_burnt_.resize(C);
+  for (int c = 0; c < C; ++c)
+    couple_burnt_[c] = control_area_[2 * c] > 0 ? burnt_area_[2 * c] / control_area_[2 * c] : 0.0;
+  outside_keeper_->apply(lattice_->positions(), couple_burnt_, 0.5 * thickness_, dt, *particles_);
 }
 
 Eigen::Vector3d Shell::turned_rest_normal(int cell, const Eigen::Vector3d& rest_normal) const {

@@ -18,6 +18,7 @@
 #include "dynamics.hpp"
 #include "fold_blend.hpp"
 #include "lattice.hpp"
+#include "outside_keeper.hpp"
 #include "particles.hpp"
 #include "phase_times.hpp"
 #include "sheet.hpp"
@@ -66,6 +67,7 @@ struct ShellSources {
   const RowMatX3* emit_normal;       ///< their flame-side normals
   const Eigen::VectorXd* emit_len;   ///< front length each stands for, m
   const RowMatX3* ignition_points;   ///< burning cells on their flame face (eq 3)
+  const Eigen::VectorXd* emit_side = nullptr;  ///< per emitter: +1/-1 the flame's side, 0 the up rule
 };
 
 class Shell {
@@ -167,6 +169,7 @@ class Shell {
   void piece_seeds(const SurfaceCells& cells, const RowMatX3i& faces, std::vector<int>* vertex_seed,
                    std::vector<int>* cell_seed) const;
   void update_piece_rotations();
+  void keep_flames_outside(double dt);
   void hand_over_masses_and_strength();
 
   const Sheet* sheet_ = nullptr;              // grid lattice
@@ -176,6 +179,8 @@ class Shell {
   std::vector<int> piece_of_;                  // per couple, its connected piece
   std::vector<int> cell_piece_;                // control surface: per fire cell, its piece
   std::vector<Eigen::Matrix3d> piece_rotation_;  // per piece: its rigid rotation since rest
+  std::unique_ptr<OutsideKeeper> outside_keeper_;  // control surface: flames stay out of closed pieces
+  Eigen::VectorXd couple_burnt_;                 // per couple, its burnt share (outside_keeper_)
   ShellParams params_;
   int M_ = 0;
   LatticeInterp mesh_interp_ = LatticeInterp::Trilinear;  // in-plane FFD of a grid lattice's mesh and cells

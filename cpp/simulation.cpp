@@ -1,6 +1,7 @@
 #include "simulation.hpp"
 
 #include "heat.hpp"
+#include "outside_keeper.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
@@ -132,11 +133,12 @@ Simulation::Simulation(const RowMatX3& vertices, const RowMatX3i& faces, const R
       shell_ = std::make_unique<Shell>(surface_->surface(), vertices, faces, shell_params(), mass_, pinned);
   }
   build_locator();
+  // Pieces: where heat may light a new fire, and which closed pieces burn on their outside.
+  if (params.shell || params.ignition_temperature > 0) find_pieces();
   if (params.ignition_temperature > 0) {
     if (!std::isfinite(params.ignition_temperature) || !(params.ignition_gain > 0) || !(params.heat_loss >= 0))
       throw std::invalid_argument("heat ignition: ignition_temperature must be finite, ignition_gain > 0 and heat_loss >= 0");
     cell_temp_.assign(nc, 0.0);
-    find_pieces();
   }
   if (params.finish_within > 0) {
     plan_cells_ = cells_->clone();
@@ -182,6 +184,22 @@ void Simulation::find_pieces() {
     ++pieces;
   }
   piece_alight_.assign(pieces, 0);
+  find_outsides(pieces);
+}
+
+void Simulation::find_outsides(int pieces) {
+  // A closed piece of a surface burns on its outside (outside_keeper.hpp): the up rule put 80 %
+  // of a sphere's flames inside it when lit at its bottom. Per piece, the sign of its cells'
+  // normals that points out.
+  piece_outside_.assign(pieces, 0.0);
+  if (grid_) return;
+  const SurfaceCells& sc = surface_->surface();
+  std::vector<int> piece = piece_;
+  for (int c = 0; c < cells_->size(); ++c)
+    if (!cells_->inside()[c]) piece[c] = -1;
+  const std::vector<double> sign = outside_signs(piece, sc.on_boundary(), sc.positions(), sc.normals(), sc.areas());
+  for (int c = 0; c < cells_->size(); ++c)
+    if (piece[c] >= 0) piece_outside_[piece[c]] = sign[c];
 }
 
 void Simulation::heat_ignite(double dt) {
@@ -775,7 +793,9 @@ const RowMatX3& Simulation::lattice_positions() const {
 
 double Simulation::flame_side(int cell) const {
   // Flames sit on the upper face of a burning cell; on a near-vertical cell the face is a
-  // seeded coin toss, which is what lets a hanging sheet crumple both ways.
+  // seeded coin toss, which is what lets a hanging sheet crumple both ways. On a closed
+  // piece, its outside (find_outsides).
+  if (!piece_outside_.empty() && piece_outside_[piece_[cell]] != 0.0) return piece_outside_[piece_[cell]];
   const double nz = cell_normal(cell).z();
   if (std::abs(nz) > 0.2) return nz > 0 ? 1.0 : -1.0;
   return seeded_uniform(params_.seed, 3, static_cast<std::uint64_t>(cell)) >= 0 ? 1.0 : -1.0;
@@ -792,9 +812,11 @@ void Simulation::gather_shell_sources() {
   emit_pos_.resize(k + ks, 3);
   emit_normal_.resize(k + ks, 3);
   emit_len_.setConstant(k + ks, cells_->spacing());
+  emit_side_.setZero(k + ks);  // 0: the particles' own rule (the upper side)
   for (Eigen::Index e = 0; e < k; ++e) {
     emit_pos_.row(e) = cell_position(fringe_buf_[e]).transpose();
     emit_normal_.row(e) = cell_normal(fringe_buf_[e]).transpose();
+    if (!piece_outside_.empty()) emit_side_[e] = piece_outside_[piece_[fringe_buf_[e]]];
   }
   for (Eigen::Index e = 0; e < ks; ++e) {
     emit_pos_.row(k + e) = source_pos_.row(e);
@@ -814,7 +836,7 @@ void Simulation::step_shell(double dt) {
     PhaseTimer timer(times_, Phase::Sources);
     gather_shell_sources();
   }
-  shell_->step(dt, ShellSources{&emit_pos_, &emit_normal_, &emit_len_, &ignition_pts_}, wind_);
+  shell_->step(dt, ShellSources{&emit_pos_, &emit_normal_, &emit_len_, &ignition_pts_, &emit_side_}, wind_);
 }
 
 }  // namespace thinburn

@@ -266,12 +266,14 @@ class Simulation {
   };
   void note_sources(const std::vector<int>& lit, double t0);
   void find_pieces();
+  void find_outsides(int pieces);
   void heat_ignite(double dt);
   RowMatX3 source_pos_;
   Eigen::VectorXd source_len_;
   std::vector<double> cell_temp_;
   std::vector<int> piece_;
   std::vector<std::uint8_t> piece_alight_;
+  std::vector<double> piece_outside_;  // per piece: +1/-1 the side of its normals facing out of a closed piece, 0 open
   void replan();
   double tau_covered() const;
   void pace_step(double dt);
@@ -298,7 +300,7 @@ class Simulation {
   // The shell (null when params.shell is off), and the sources the fire hands it each step.
   std::unique_ptr<Shell> shell_;
   RowMatX3 emit_pos_, emit_normal_, ignition_pts_;
-  Eigen::VectorXd emit_len_;
+  Eigen::VectorXd emit_len_, emit_side_;
   // Nearest-cell queries for ignite; its displacement bounds follow the lattice lazily.
   std::unique_ptr<CellLocator> locator_;
   mutable bool locator_stale_ = true;

@@ -104,8 +104,9 @@ def test_a_burning_shell_crumples_without_leaving_its_layer_or_stretching(shape)
     # 40 s of burning (a quarter to a third of the shell burnt). Every vertex stays between its
     # couples' bottom and top (measured 0.509-0.531 across the layer on the lantern, 0.510-0.557
     # on the sphere), and unburnt edges keep their length: p99 of |l/L - 1| at most 0.42 % on the
-    # lantern and 0.095 % on the sphere, issue #12's 1 % for paper (0.46 % and 0.15 % before
-    # pyrolysis had a 3 cm range, docs/dynamics.md §2; 13 % and 9.3 % before the curl
+    # lantern and 0.13 % on the sphere, issue #12's 1 % for paper (the sphere 0.095 % while its
+    # lower half's flames and pyrolysis sat on its inside, docs/particles.md "Closed shells";
+    # 0.46 % and 0.15 % before pyrolysis had a 3 cm range, docs/dynamics.md §2; 13 % and 9.3 % before the curl
     # rolled across the front; 1.63 % and 0.46 % before it kept the shell's Gaussian curvature,
     # docs/dynamics.md §2 "Curved shells": the far side's faint curl barrelled the lantern and
     # squeezed its rims; the lantern 0.63 % before its rims had couples, docs/lattice.md).
@@ -119,7 +120,7 @@ def test_a_burning_shell_crumples_without_leaving_its_layer_or_stretching(shape)
         V, F = S.icosphere(4, 0.1)
         sim, strain, layer, _ = _burn_shell(V, F, [0.1, 0.0, 0.0], pinned=np.flatnonzero(V[:, 2] > 0.098),
                                             lattice=12)
-        assert strain < 0.0012
+        assert strain < 0.0015
     assert sim.geometry == "surface"
     assert 0.45 < layer[0] and layer[1] < 0.6
     assert (sim.cell_states() == 2).mean() > 0.2
@@ -205,6 +206,25 @@ def test_a_sheet_lit_at_a_corner_keeps_its_far_end_on_the_table(reach, lit_bound
     X = sim.vertex_positions()
     assert lit_bound[0] < X[0, 2] < lit_bound[1]
     assert far_bound[0] <= X[-1, 2] < far_bound[1]
+
+
+def test_a_closed_shell_burns_on_its_outside():
+    # docs/particles.md, "Closed shells": a 10 cm paper sphere on its table lit at its bottom.
+    # Its flames are born on its outside and stay there, sliding along it (measured: no live
+    # particle within 95 mm of its centre at 1, 2 and 3 s, the nearest 104.3 mm). With the up
+    # rule they were born on the lower half's inside, or rose up through it: 89-91 % inside.
+    from thinburn import _surface_shapes as S
+
+    V, F = S.icosphere(4, 0.1)
+    V = V + [0.0, 0.0, 0.1]
+    sim = thinburn.Simulation(V, F, cells=64, floor=0.0)
+    sim.ignite((0.0, 0.0, 0.0), radius=0.02)
+    for second in range(3):
+        sim.run(1.0, dt=1 / 24)
+        P, _ = sim.particles()
+        r = np.linalg.norm(P - sim.vertex_positions().mean(axis=0), axis=1)
+        assert len(P) > 100
+        assert r.min() > 0.1
 
 
 def test_a_stack_of_sheets_closer_than_its_couples_keeps_each_sheet_in_its_own_lattice():
