@@ -86,7 +86,7 @@ def _stamp(block):
 
 def fire_group():
     """Geometry node group "ThinBurn Fire" (see the module docstring). Point i < Count of the
-    cached mesh is particle i's position; point Count + i carries (temperature, alive, 0)."""
+    cached mesh is particle i's position; point Count + i carries (temperature, alive, lick)."""
     tree = _current(bpy.data.node_groups, FIRE_GROUP)
     if tree is not None:
         return tree
@@ -127,11 +127,11 @@ def fire_group():
     set_input(store, "Name", ATTR_TEMPERATURE)
     L(gi.outputs["Geometry"], store.inputs["Geometry"])
     L(split.outputs["X"], socket(store.inputs, "Value"))
-    # Per particle slot (the cache's rows keep a particle's slot while it lives): its tongue's
-    # height, LICK_MIN..LICK_MAX of Flame Height, mostly short (u^2), and its puffs' radius.
-    lick = node(tree, "FunctionNodeRandomValue", -800, 500, data_type="FLOAT")  # 0..1, ID = slot
+    # Per particle, its tongue's height: LICK_MIN..LICK_MAX of Flame Height, mostly short (u^2),
+    # u the particle's own seed in [0, 1), fixed for its life (the cache's third column); and
+    # its puffs' radius.
     skew = node(tree, "ShaderNodeMath", -650, 500, operation="POWER")
-    L(socket(lick.outputs, "Value_001"), skew.inputs[0])  # the float output ("Value" is the vector's)
+    L(split.outputs["Z"], skew.inputs[0])
     skew.inputs[1].default_value = 2.0
     spread = node(tree, "ShaderNodeMath", -500, 500, operation="MULTIPLY_ADD")
     L(skew.outputs[0], spread.inputs[0])
@@ -392,12 +392,14 @@ def light_material():
     return mat
 
 
-def particle_cache_rows(frames) -> tuple:
+def particle_cache_rows(frames, licks=None) -> tuple:
     """Pack per-frame particles [(positions (k, 3), temperatures (k,))] into equal-size PC2
-    samples: K = max k; rows 0..K-1 positions, rows K..2K-1 (temperature, alive, 0)."""
+    samples: K = max k; rows 0..K-1 positions, rows K..2K-1 (temperature, alive, lick), lick
+    the particle's tongue-height seed in [0, 1) (licks: per frame (k,), worker.lick_of; 0
+    without)."""
     count = max([len(t) for _, t in frames] + [1])
     rows = []
-    for pos, temp in frames:
+    for f, (pos, temp) in enumerate(frames):
         k = len(temp)
         sample = np.zeros((2 * count, 3), dtype=np.float32)
         sample[:k] = pos
@@ -405,6 +407,8 @@ def particle_cache_rows(frames) -> tuple:
             sample[k:count] = pos[0]  # idle slots sit on a live particle, hidden by alive = 0
         sample[count:count + k, 0] = temp
         sample[count:count + k, 1] = 1.0
+        if licks is not None:
+            sample[count:count + k, 2] = licks[f]
         rows.append(sample)
     return count, rows
 
@@ -596,10 +600,11 @@ def apply_embers(obj, sheet_pc2_path: str, frames, frame_start: float) -> None:
     gn[ident["Min Temperature"]] = 1.0  # dead slots have 0
 
 
-def apply_particles(obj, sheet_pc2_path: str, frames, frame_start: float) -> None:
+def apply_particles(obj, sheet_pc2_path: str, frames, frame_start: float, licks=None) -> None:
     """Write the fire particles to their own PC2, the flame object "ThinBurn Fire <sheet>"
-    and the camera-invisible "ThinBurn Fire Light <sheet>" that lights the scene."""
-    count, rows = particle_cache_rows(frames)
+    and the camera-invisible "ThinBurn Fire Light <sheet>" that lights the scene. licks: per
+    frame, each particle's tongue-height seed (particle_cache_rows)."""
+    count, rows = particle_cache_rows(frames, licks)
     abs_sheet = bpy.path.abspath(sheet_pc2_path)
     abs_fire = abs_sheet[:-len(".pc2")] + "_fire.pc2"
     with cache.PC2Writer(abs_fire, 2 * count, start_frame=frame_start) as writer:

@@ -264,6 +264,7 @@ class BakeJob:
         self.stretch = stretch.StretchMeter(world, edges) if self.shell else None
         self.want_particles = core_has_particles() and self.shell
         self.particle_frames = []
+        self.particle_licks = []   # per frame, each particle's tongue height seed (worker.lick_of)
         self.particle_owners = []  # a group's: which sheet's fire each particle is (its index)
         self.samples = {}
         self.next_sample = 0      # index of the next frame to sample
@@ -571,9 +572,10 @@ class BakeJob:
                     sheet.add(index, positions)
                 self.lit += lit
                 if particles is not None:  # to the world: the fire objects do not move
-                    pts, temps = particles
+                    pts, temps, licks = particles
                     F = self.frame_maps[index]
                     self.particle_frames.append((moving.to_world(F, pts).astype(np.float32), temps))
+                    self.particle_licks.append(licks)
                     if self.grouped:
                         self.particle_owners.append(self._nearest_sheet(positions, pts))
                 self.frames_done = index + 1
@@ -657,18 +659,21 @@ class BakeJob:
         md.frame_scale = 1.0 / sheet.cache_step
         md.frame_start = start / sheet.cache_step
         if self.want_particles:
-            fire.apply_particles(obj, sheet.modifier_path, particles, start)
+            frames, licks = particles
+            fire.apply_particles(obj, sheet.modifier_path, frames, start, licks)
         obj.thinburn.baked_file = sheet.modifier_path
         obj.thinburn.baked_shape = "" if self.shape is None else describe_shape(self.shape)
         obj.thinburn.baked_strain = 0.0
         materials.record_bake(obj)
 
-    def _particles_of(self, k: int) -> list:
-        """Sheet k's fire particles, frame by frame (a lone sheet has them all)."""
+    def _particles_of(self, k: int) -> tuple:
+        """Sheet k's fire particles frame by frame (a lone sheet has them all), and their
+        tongue heights' seeds."""
         if not self.grouped:
-            return self.particle_frames
-        return [(pts[own == k], temps[own == k])
-                for (pts, temps), own in zip(self.particle_frames, self.particle_owners)]
+            return self.particle_frames, self.particle_licks
+        owners = self.particle_owners
+        return ([(pts[own == k], temps[own == k]) for (pts, temps), own in zip(self.particle_frames, owners)],
+                [licks[own == k] for licks, own in zip(self.particle_licks, owners)])
 
     def _summary(self, ignite, ignited: int) -> str:
         frames = f"frames {self.frames[0]}–{self.frames[-1]} in {self.elapsed:.1f} s"

@@ -15,6 +15,14 @@ import numpy as np
 
 from thinburn import force_fields as fields
 
+
+def lick_of(ids) -> np.ndarray:
+    """Per fire particle, a number in [0, 1) fixed by its birth serial number for its life (the
+    golden-ratio sequence, evenly spread): its flame tongue's height (fire.py, "ThinBurn Fire").
+    A particle's row changes as others die, so a random value per row redrew every height
+    each frame."""
+    return np.mod(np.asarray(ids, dtype=np.float64) * 0.6180339887498949, 1.0).astype(np.float32)
+
 MAX_PATH_SAMPLES = 64  # per igniter and frame: bounds the work of a fast-moving igniter
 
 
@@ -138,7 +146,8 @@ class CoreWorker(threading.Thread):
         if self._want_particles:
             pts, temps = sim.particles()
             particles = (np.array(pts, dtype=np.float32, copy=True),
-                         np.array(temps, dtype=np.float32, copy=True))
+                         np.array(temps, dtype=np.float32, copy=True),
+                         lick_of(sim.particle_ids()))
         if task.flames is not None:
             sim.set_fire_sources(*task.flames)
         if task.step:

@@ -222,6 +222,12 @@ void define_simulation(py::module_& m) {
            })
       .def("particle_velocities",
            [](const S& s) { return s.particles() ? RowMatX3(s.particles()->velocities()) : RowMatX3(0, 3); })
+      .def("particle_ids",
+           [](const S& s) {
+             const std::vector<std::uint64_t> none;
+             const auto& ids = s.particles() ? s.particles()->ids() : none;
+             return py::array_t<std::uint64_t>(static_cast<py::ssize_t>(ids.size()), ids.data());
+           })
       .def_property_readonly("particles_dropped", [](const S& s) { return s.particles() ? s.particles()->dropped() : 0; })
       .def("set_dynamics", [](S& s, const py::dict& kw) {
         DynamicsParams p = s.params().dynamics;

@@ -533,6 +533,11 @@ class Simulation:
         """(k, 3) velocities of the live fire particles, m/s."""
         return self._sim.particle_velocities()
 
+    def particle_ids(self) -> np.ndarray:
+        """(k,) uint64 birth serial numbers of the live fire particles, in ``particles()``'s
+        order: a particle keeps its number for its life, where its row moves as others die."""
+        return self._sim.particle_ids()
+
     def set_dynamics(self, **params) -> None:
         """Change motion parameters between steps (the DYNAMICS_KEYS and ``integrator``)."""
         self._require_shell("set_dynamics")

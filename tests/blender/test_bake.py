@@ -293,14 +293,23 @@ def test_bake_writes_fire_particles_when_the_core_has_them(addon, tmp_path, monk
             pos = np.tile([0.0, 0.0, 0.6], (k, 1)) + 0.01 * np.arange(k)[:, None]
             return pos, np.full(k, 1000.0 + self.time)
 
+        def particle_ids(self):
+            return np.array([7, 8], dtype=np.uint64)[:int(round(self.time * 24)) % 3]
+
     monkeypatch.setattr(thinburn, "Simulation", WithParticles)
     sheet = make_sheet()
     setup_bake(sheet, frames=6, cache_dir=tmp_path)
     make_igniter(sheet, (0.0, 0.0, 0.5))
     assert bpy.ops.thinburn.bake() == {"FINISHED"}
     head, data = addon.cache.read_pc2(cache_file(tmp_path, "Sheet_fire.pc2"))
-    assert head["samples"] == 6 and head["points"] == 4  # 2 slots: positions, then (T, alive, 0)
+    assert head["samples"] == 6 and head["points"] == 4  # 2 slots: positions, then (T, alive, lick)
     np.testing.assert_array_equal(data[:, 2:, 1], [[0, 0], [1, 0], [1, 1], [0, 0], [1, 0], [1, 1]])
+    # A particle's tongue-height seed follows its birth number, not its row: 7 and 8 give
+    # 0.326 and 0.944 (the golden-ratio sequence), whatever frame.
+    seeds = addon.worker.lick_of([7, 8])
+    np.testing.assert_allclose(seeds, [0.3262379, 0.9442719], atol=1e-6)
+    np.testing.assert_array_equal(data[1:3, 2, 2], [seeds[0], seeds[0]])
+    np.testing.assert_array_equal(data[2, 3, 2], seeds[1])
     fire = bpy.data.objects["ThinBurn Fire Sheet"]
     assert fire.modifiers["ThinBurn Cache"].filepath.endswith("Sheet_fire.pc2")
 
