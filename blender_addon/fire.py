@@ -84,6 +84,15 @@ def _stamp(block):
     return block
 
 
+def _store(tree, x, y, name, geometry, value):
+    """A Store Named Attribute node (a float on points) writing `value` as `name` on `geometry`."""
+    store = node(tree, "GeometryNodeStoreNamedAttribute", x, y, data_type="FLOAT", domain="POINT")
+    set_input(store, "Name", name)
+    tree.links.new(geometry, store.inputs["Geometry"])
+    tree.links.new(value, socket(store.inputs, "Value"))
+    return store
+
+
 def fire_group():
     """Geometry node group "ThinBurn Fire" (see the module docstring). Point i < Count of the
     cached mesh is particle i's position; point Count + i carries (temperature, alive, lick)."""
@@ -123,10 +132,7 @@ def fire_group():
     keep = node(tree, "FunctionNodeBooleanMath", -600, 0, operation="AND")
     L(first.outputs[0], keep.inputs[0])
     L(glowing.outputs[0], keep.inputs[1])
-    store = node(tree, "GeometryNodeStoreNamedAttribute", -600, 250, data_type="FLOAT", domain="POINT")
-    set_input(store, "Name", ATTR_TEMPERATURE)
-    L(gi.outputs["Geometry"], store.inputs["Geometry"])
-    L(split.outputs["X"], socket(store.inputs, "Value"))
+    store = _store(tree, -600, 250, ATTR_TEMPERATURE, gi.outputs["Geometry"], split.outputs["X"])
     # Per particle, its tongue's height: LICK_MIN..LICK_MAX of Flame Height, mostly short (u^2),
     # u the particle's own seed in [0, 1), fixed for its life (the cache's third column); and
     # its puffs' radius.
@@ -137,14 +143,8 @@ def fire_group():
     L(skew.outputs[0], spread.inputs[0])
     spread.inputs[1].default_value = LICK_MAX - LICK_MIN
     spread.inputs[2].default_value = LICK_MIN
-    store_lick = node(tree, "GeometryNodeStoreNamedAttribute", -450, 250, data_type="FLOAT", domain="POINT")
-    set_input(store_lick, "Name", ATTR_LICK)
-    L(store.outputs[0], store_lick.inputs["Geometry"])
-    L(spread.outputs[0], socket(store_lick.inputs, "Value"))
-    store_r = node(tree, "GeometryNodeStoreNamedAttribute", -300, 250, data_type="FLOAT", domain="POINT")
-    set_input(store_r, "Name", ATTR_RADIUS)
-    L(store_lick.outputs[0], store_r.inputs["Geometry"])
-    L(gi.outputs["Radius"], socket(store_r.inputs, "Value"))
+    store_lick = _store(tree, -450, 250, ATTR_LICK, store.outputs[0], spread.outputs[0])
+    store_r = _store(tree, -300, 250, ATTR_RADIUS, store_lick.outputs[0], gi.outputs["Radius"])
     points = node(tree, "GeometryNodeMeshToPoints", -400, 100)
     L(store_r.outputs[0], points.inputs["Mesh"])
     L(keep.outputs[0], points.inputs["Selection"])
@@ -185,10 +185,7 @@ def fire_group():
     cooled = node(tree, "ShaderNodeMath", 400, -450, operation="MULTIPLY")
     L(temp.outputs["Attribute"], cooled.inputs[0])
     L(cool.outputs[0], cooled.inputs[1])
-    tongue = node(tree, "GeometryNodeStoreNamedAttribute", 800, 100, data_type="FLOAT", domain="POINT")
-    set_input(tongue, "Name", ATTR_TEMPERATURE)
-    L(lift.outputs[0], tongue.inputs["Geometry"])
-    L(cooled.outputs[0], socket(tongue.inputs, "Value"))
+    tongue = _store(tree, 800, 100, ATTR_TEMPERATURE, lift.outputs[0], cooled.outputs[0])
     # and narrows: its puffs' radius Radius * (1 - TAPER * along), so it ends in a tip
     narrow = node(tree, "ShaderNodeMath", 600, -650, operation="MULTIPLY_ADD")
     L(along.outputs[0], narrow.inputs[0])
@@ -197,10 +194,7 @@ def fire_group():
     tip_r = node(tree, "ShaderNodeMath", 800, -650, operation="MULTIPLY")
     L(narrow.outputs[0], tip_r.inputs[0])
     L(gi.outputs["Radius"], tip_r.inputs[1])
-    tapered = node(tree, "GeometryNodeStoreNamedAttribute", 900, 250, data_type="FLOAT", domain="POINT")
-    set_input(tapered, "Name", ATTR_RADIUS)
-    L(tongue.outputs[0], tapered.inputs["Geometry"])
-    L(tip_r.outputs[0], socket(tapered.inputs, "Value"))
+    tapered = _store(tree, 900, 250, ATTR_RADIUS, tongue.outputs[0], tip_r.outputs[0])
     both = node(tree, "GeometryNodeJoinGeometry", 1000, 100)  # the particles and their tongues
     L(tapered.outputs[0], both.inputs[0])
     L(points.outputs[0], both.inputs[0])
@@ -224,14 +218,8 @@ def fire_group():
     weight = node(tree, "ShaderNodeMath", 1600, -100, operation="MULTIPLY")
     L(fourth.outputs[0], weight.inputs[0])
     L(gi.outputs["Intensity"], weight.inputs[1])
-    store_k = node(tree, "GeometryNodeStoreNamedAttribute", 1200, 100, data_type="FLOAT", domain="POINT")
-    set_input(store_k, "Name", ATTR_KELVIN)
-    L(both.outputs[0], store_k.inputs["Geometry"])
-    L(kelvin.outputs[0], socket(store_k.inputs, "Value"))
-    store_w = node(tree, "GeometryNodeStoreNamedAttribute", 1400, 100, data_type="FLOAT", domain="POINT")
-    set_input(store_w, "Name", ATTR_FLAME)
-    L(store_k.outputs[0], store_w.inputs["Geometry"])
-    L(weight.outputs[0], socket(store_w.inputs, "Value"))
+    store_k = _store(tree, 1200, 100, ATTR_KELVIN, both.outputs[0], kelvin.outputs[0])
+    store_w = _store(tree, 1400, 100, ATTR_FLAME, store_k.outputs[0], weight.outputs[0])
     flames = store_w.outputs[0]
     # --- output 0: a volume (density from Points to Volume, the two grids sampled from the
     # nearest flame point); Blender's volume grids carry no point attributes by themselves
