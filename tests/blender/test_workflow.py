@@ -310,3 +310,23 @@ def test_a_mesh_too_coarse_for_its_fire_detail_is_told_to_subdivide(addon, tmp_p
     assert "'Sheet' has 9 vertices for 32×32 fire cells" in text and "Subdivide" in text
     sheet.thinburn.cells = 8  # a vertex every 4 cells is fine
     assert addon.operators.bake_now(bpy.context, sheet).warnings == []
+
+
+def test_quick_burn_says_when_the_fire_would_stay_a_small_spot(addon, tmp_path):
+    """The artists' trial: Quick Burn on paper at its own 3.5 mm/s lit 71 of an A4 sheet's
+    3721 vertices in a 5 s shot, and nothing said why. Its report notes a fire that reaches less
+    than a quarter of the sheet's size from Start to End, and the two settings that change it;
+    not with a Burn Duration, nor at a Spread Speed that reaches that far."""
+    table, sheet = _quick_scene(tmp_path)  # a 0.2 m sheet (28 cm across), 24 frames: 1 s at 24 fps
+    settings = sheet.thinburn
+    scene = bpy.context.scene
+    notes = addon.quick.setup(bpy.context, sheet, [(0.0, 0.0, 0.75)], scene_range=True, exclude={sheet.name})
+    slow = [n for n in notes if "Spread Speed" in n]
+    # 23 frames at 24 fps: 0.96 s, 3.4 mm at paper's 3.5 mm/s
+    assert len(slow) == 1 and "3.5 mm/s" in slow[0] and "0.3 cm" in slow[0] and "28 cm" in slow[0], notes
+    assert "Burn Duration" in slow[0]
+    settings.burn_duration = 1.0
+    assert addon.quick.slow_fire_note(sheet, settings, scene) is None
+    settings.burn_duration = 0.0
+    settings.mat_V0 = 80.0  # 77 mm in the shot, beyond a quarter of 28 cm
+    assert addon.quick.slow_fire_note(sheet, settings, scene) is None
