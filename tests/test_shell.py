@@ -210,9 +210,10 @@ def test_a_sheet_lit_at_a_corner_keeps_its_far_end_on_the_table(reach, lit_bound
 
 def test_a_closed_shell_burns_on_its_outside():
     # docs/particles.md, "Closed shells": a 10 cm paper sphere on its table lit at its bottom.
-    # Its flames are born on its outside and stay there, sliding along it (measured: no live
-    # particle within 95 mm of its centre at 1, 2 and 3 s, the nearest 104.3 mm). With the up
-    # rule they were born on the lower half's inside, or rose up through it: 89-91 % inside.
+    # Its flames are born on its outside and stay there, sliding along it (measured: the nearest
+    # live particle 104.3 mm from its centre at 1, 2 and 3 s; bound 100 mm, its radius). With the
+    # up rule they were born on the lower half's inside, or rose up through it: 89-91 % within
+    # 95 mm of its centre.
     from thinburn import _surface_shapes as S
 
     V, F = S.icosphere(4, 0.1)
