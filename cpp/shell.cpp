@@ -735,6 +735,36 @@ void Shell::vertex_positions_into(Eigen::Ref<RowMatX3> out) const {
   if (fold_blend_ && mesh_follows_folds_) fold_blend_->apply(*lattice_, z_min, out);
 }
 
+void Shell::mesh_points(const Eigen::Ref<const RowMatXi>& idx, const Eigen::Ref<const RowMatXd>& w,
+                        RowMatX3& out) const {
+  if (control_)
+    throw std::invalid_argument("mesh_points: needs a flat sheet's grid lattice (geometry=\"plane\"); this "
+                                "shell's lattice follows a control surface, which embeds mesh vertices only");
+  const RowMatX2& param = sheet_->vertex_param();
+  const RowMatX3& verts = sheet_->vertices();
+  const Eigen::Index n = idx.rows();
+  RowMatX3 coords(n, 3), rest(n, 3);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    Eigen::Vector2d uv = Eigen::Vector2d::Zero();
+    Eigen::Vector3d x = Eigen::Vector3d::Zero();
+    for (Eigen::Index k = 0; k < idx.cols(); ++k) {
+      uv += w(i, k) * param.row(idx(i, k)).transpose();
+      x += w(i, k) * verts.row(idx(i, k)).transpose();
+    }
+    const Eigen::Vector2d st = sheet_->lattice_st(uv.x(), uv.y(), M_);
+    coords.row(i) << st.x(), st.y(), 0.5;
+    rest.row(i) = x.transpose();
+  }
+  // The same map as vertex_positions, without its cache (whose tolerance would blur a
+  // measure taken along an edge).
+  std::lock_guard<std::mutex> lock(mesh_mutex_);
+  const double z_min = params_.has_floor ? params_.floor_z : -std::numeric_limits<double>::infinity();
+  out.resize(n, 3);
+  lattice_->deform(lattice_->embed(coords, rest, mesh_interp_), out, z_min);
+  if (fold_blend_ && mesh_follows_folds_)
+    FoldBlend(lattice_->embed(coords, rest, LatticeInterp::Trilinear)).apply(*lattice_, z_min, out);
+}
+
 void Shell::hand_over_masses_and_strength() {
   if (mass_dirty_) {
     // Couples outside the outline carry no sheet; a small floor keeps them integrable.

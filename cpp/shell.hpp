@@ -26,6 +26,9 @@
 
 namespace thinburn {
 
+using RowMatXi = Eigen::Matrix<int, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+using RowMatXd = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
 /// Share of the sheet's size a couple may drift before the mesh's vertices it carries are redone
 /// (CachedDeform's tolerance over the sheet's larger side): a vertex then lags its exact place
 /// by at most twice that, 2 um on a 1 m sheet, far below a pixel (docs/lattice.md, "The mesh's
@@ -119,6 +122,12 @@ class Shell {
   void vertex_positions(RowMatX3& out) const;
   /// @brief The same into a caller's n x 3 rows (no allocation on a grid lattice).
   void vertex_positions_into(Eigen::Ref<RowMatX3> out) const;
+  /// @brief Grid lattice: where points of the rest mesh are now, mapped as its vertices are
+  /// (the spline, where the lattice folds its couples, the floor). Row i of the rest points is
+  /// sum_k w(i, k) * vertex idx(i, k) at rest (indices checked by the caller). Throws
+  /// std::invalid_argument on a control surface, whose embedding is per mesh vertex.
+  void mesh_points(const Eigen::Ref<const RowMatXi>& idx, const Eigen::Ref<const RowMatXd>& w,
+                   RowMatX3& out) const;
   /// @brief Mesh vertices the last vertex_positions call recomputed (a grid lattice keeps the
   /// others from the call before: their couples had not moved); -1 on a control surface.
   long mesh_points_redone() const { return mesh_deform_ ? mesh_deform_->points_redone() : -1; }

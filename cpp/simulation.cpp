@@ -742,6 +742,27 @@ void Simulation::vertex_positions_into(Eigen::Ref<RowMatX3> out) const {
   shell_->vertex_positions_into(out);
 }
 
+RowMatX3 Simulation::mesh_points(const Eigen::Ref<const RowMatXi>& idx, const Eigen::Ref<const RowMatXd>& w) const {
+  if (idx.rows() != w.rows() || idx.cols() != w.cols())
+    throw std::invalid_argument("weights: expected the shape of vertices (" + std::to_string(idx.rows()) + ", " +
+                                std::to_string(idx.cols()) + "), got (" + std::to_string(w.rows()) + ", " +
+                                std::to_string(w.cols()) + ")");
+  const long n = static_cast<long>(vertices_.rows());
+  for (Eigen::Index i = 0; i < idx.size(); ++i)
+    if (idx.data()[i] < 0 || idx.data()[i] >= n)
+      throw std::invalid_argument("vertices: indices must be in [0, " + std::to_string(n) + "), got " +
+                                  std::to_string(idx.data()[i]));
+  RowMatX3 out;
+  if (shell_) {
+    shell_->mesh_points(idx, w, out);
+    return out;
+  }
+  out = RowMatX3::Zero(idx.rows(), 3);
+  for (Eigen::Index i = 0; i < idx.rows(); ++i)
+    for (Eigen::Index k = 0; k < idx.cols(); ++k) out.row(i) += w(i, k) * vertices_.row(idx(i, k));
+  return out;
+}
+
 Eigen::VectorXd Simulation::vertex_char() const {
   const std::vector<double> ch = cell_char();
   Eigen::VectorXd out(vertices_.rows());

@@ -183,6 +183,11 @@ class Simulation {
   /// @brief vertex_positions into a caller's n x 3 rows; throws std::invalid_argument naming
   /// `out` when its row count is not the mesh's.
   void vertex_positions_into(Eigen::Ref<RowMatX3> out) const;
+  /// @brief Where points of the rest mesh are now: row i is sum_k w(i, k) * vertex idx(i, k)
+  /// at rest, mapped as the vertices are (Shell::mesh_points; without a shell, at rest). Throws
+  /// std::invalid_argument naming `vertices` or `weights` when their shapes differ or an
+  /// index is not a vertex's.
+  RowMatX3 mesh_points(const Eigen::Ref<const RowMatXi>& idx, const Eigen::Ref<const RowMatXd>& w) const;
   Eigen::VectorXd vertex_char() const;
   Eigen::VectorXd vertex_ignition_times() const;
   Eigen::VectorXd vertex_burnout_times() const;

@@ -4,8 +4,10 @@ A square fabric of `size` stands upright on the floor (its bottom edge `z0` abov
 and collapses into a pile: 4 s at 1/24 s, cells=128, the core's default lattice (or
 `--lattice M`). A pile is chaotic, so one drop says little: six drops from bottom edges 0, 2,
 ... 10 mm apart (z0 = 5.0 .. 6.0 cm). Per size and fabric: the 99th percentile of |l/L - 1| over
-all mesh edges at 4 s for each drop and their median, the lowest lattice couple centre (mm; below
-0 the mesh is clamped to the floor there), and the pile's height.
+all mesh edges at 4 s for each drop and their median, the same for the edges' lengths along the
+surface (SurfaceStrain: where the lattice creases between couples, an edge across the crease is a
+chord, shorter than the surface; docs/lattice.md, "Creases between couples"), the lowest lattice
+couple centre (mm; below 0 the mesh is clamped to the floor there), and the pile's height.
 Run: python scripts/pile_ensemble.py [--sizes 0.2 0.4] [--materials cloth silk] [--lattice M]
 """
 import argparse
@@ -14,7 +16,7 @@ import time
 import numpy as np
 
 import thinburn
-from thinburn._mesh_measures import EdgeStrain
+from thinburn._mesh_measures import EdgeStrain, SurfaceStrain
 from thinburn.scenes import rect_sheet
 
 
@@ -25,7 +27,8 @@ def drop(size, material, z0, lattice=None):
     sim.run(4.0, dt=1 / 24)
     x = sim.vertex_positions()
     centre = sim.lattice_positions().reshape(-1, 2, 3).mean(axis=1)
-    return 100 * np.percentile(EdgeStrain(v, f)(x), 99), 1000 * centre[:, 2].min(), x[:, 2].max(), sim.lattice_couples
+    return (100 * np.percentile(EdgeStrain(v, f)(x), 99), 1000 * centre[:, 2].min(), x[:, 2].max(),
+            sim.lattice_couples, 100 * np.percentile(SurfaceStrain(v, f)(sim), 99))
 
 
 def main():
@@ -40,6 +43,8 @@ def main():
             r = np.array([drop(size, material, 0.05 + 0.002 * k, a.lattice) for k in range(6)])
             print(f"{100 * size:.0f} cm {material:6s} {int(r[0, 3])} couples: p99 % "
                   + " ".join(f"{p:5.2f}" for p in r[:, 0]) + f" | median {np.median(r[:, 0]):5.2f} | "
+                  "along the surface " + " ".join(f"{p:4.2f}" for p in r[:, 4])
+                  + f" | median {np.median(r[:, 4]):4.2f} | "
                   f"lowest centre {np.median(r[:, 1]):6.2f} mm (median) | height {np.median(r[:, 2]):.3f} m | "
                   f"{time.perf_counter() - t0:.0f} s", flush=True)
 

@@ -169,6 +169,12 @@ void define_simulation(py::module_& m) {
              s.vertex_positions_into(out);
            },
            py::arg("out").noconvert(), py::arg("threads"))
+      .def("mesh_points",
+           [](const S& s, const RowMatXi& idx, const RowMatXd& w) {
+             py::gil_scoped_release release;
+             return s.mesh_points(idx, w);
+           },
+           py::arg("vertices"), py::arg("weights"))
       .def("mesh_points_redone", [](const S& s) { return s.shell() ? s.shell()->mesh_points_redone() : -1L; })
       .def("vertex_char", &S::vertex_char)
       .def("vertex_ignition_times", &S::vertex_ignition_times)

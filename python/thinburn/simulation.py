@@ -668,6 +668,20 @@ class Simulation:
         self._sim.vertex_positions_into(out, self._threads)
         return out
 
+    def mesh_points(self, vertices, weights) -> np.ndarray:
+        """(n, 3) where material points of the mesh are now: row i at rest is
+        ``sum_k weights[i, k] * rest vertex vertices[i, k]`` (a point of a face or an edge, its
+        weights summing to 1), mapped as the mesh's vertices are (a flat sheet's lattice; on a
+        control surface, ``geometry="surface"``, a ValueError). A measure of the surface
+        between the vertices: ``thinburn._mesh_measures.SurfaceStrain`` takes each edge's
+        length along it (docs/lattice.md, "Creases between couples")."""
+        idx = V.index_array(vertices, "vertices", (-1, -1), self.n_vertices)
+        w = V.real_array(weights, "weights", idx.shape)
+        if w.size and not np.allclose(w.sum(axis=1), 1.0, rtol=0.0, atol=1e-9):
+            raise ValueError("weights: each row must sum to 1 (a point between its vertices), got sums "
+                             f"from {w.sum(axis=1).min():g} to {w.sum(axis=1).max():g}")
+        return self._sim.mesh_points(idx, w)
+
     @property
     def mesh_points_redone(self) -> int:
         """Mesh vertices the last ``vertex_positions`` recomputed; the others kept their
