@@ -891,7 +891,8 @@ void Shell::update_piece_rotations() {
 
 void Shell::keep_flames_outside(double dt) {
   // Half a lattice thickness out: the flames' side of the layer, as where they are born.
-  if (!outside_keeper_) return;
+  // Nothing to keep out while no particle lives (the burnt shares are only for them).
+  if (!outside_keeper_ || particles_->count() == 0) return;
   const int C = static_cast<int>(piece_of_.size());
   couple_burnt_.resize(C);
   for (int c = 0; c < C; ++c)
