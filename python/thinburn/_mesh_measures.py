@@ -35,23 +35,18 @@ class EdgeStrain:
 
 
 class SurfaceStrain(EdgeStrain):
-    """|s / L - 1| per edge, s the length along the sheet's surface now of the edge's rest
-    segment: `samples` pieces through Simulation.mesh_points. Where the lattice folds sharply
-    between two couples the surface has a crease, and an edge across it is a chord, shorter
-    than the surface under it (docs/lattice.md, "Creases between couples"); this measures the
-    surface, EdgeStrain the mesh."""
+    """|s / L - 1| per edge, s the edge's length along the sheet's surface now
+    (Simulation.surface_lengths, `samples` pieces). Where the lattice folds sharply between
+    two couples the surface has a crease, and an edge across it is a chord, shorter than the
+    surface under it (docs/lattice.md, "Creases between couples"); this measures the surface,
+    EdgeStrain the mesh."""
 
     def __init__(self, rest, faces, samples=16):
         super().__init__(rest, faces)
-        t = np.linspace(0.0, 1.0, samples + 1)
         self.samples = samples
-        self.vertices = np.repeat(self.edges, samples + 1, axis=0).reshape(-1, 2)
-        self.weights = np.tile(np.stack([1.0 - t, t], 1), (len(self.edges), 1))
 
     def __call__(self, sim):
-        p = sim.mesh_points(self.vertices, self.weights).reshape(len(self.edges), self.samples + 1, 3)
-        along = np.linalg.norm(np.diff(p, axis=1), axis=2).sum(axis=1)
-        return np.abs(along / self.rest_length - 1.0)
+        return np.abs(sim.surface_lengths(self.edges, self.samples) / self.rest_length - 1.0)
 
 
 def face_adjacency(faces):

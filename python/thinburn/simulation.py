@@ -682,6 +682,18 @@ class Simulation:
                              f"from {w.sum(axis=1).min():g} to {w.sum(axis=1).max():g}")
         return self._sim.mesh_points(idx, w)
 
+    def surface_lengths(self, edges, samples=16) -> np.ndarray:
+        """(n,) each edge's length along the sheet's surface now: its rest segment between the
+        vertices ``edges[i]`` in ``samples`` pieces through ``mesh_points``. Where the lattice
+        creases between couples an edge across the crease is a chord, shorter than this
+        (docs/lattice.md, "Creases between couples"). A flat sheet's lattice only."""
+        e = V.index_array(edges, "edges", (-1, 2), self.n_vertices)
+        k = V.integer(samples, "samples", low=1)
+        t = np.linspace(0.0, 1.0, k + 1)
+        w = np.tile(np.stack([1.0 - t, t], 1), (len(e), 1))
+        p = self.mesh_points(np.repeat(e, k + 1, axis=0), w).reshape(len(e), k + 1, 3)
+        return np.linalg.norm(np.diff(p, axis=1), axis=2).sum(axis=1)
+
     @property
     def mesh_points_redone(self) -> int:
         """Mesh vertices the last ``vertex_positions`` recomputed; the others kept their
