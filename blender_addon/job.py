@@ -300,8 +300,10 @@ class BakeJob:
         # (thinburn.bake_frame), F_k maps it to the world at frame index k.
         self.frame_maps = {}
         self.tilt = 0.0  # degrees, the most the bake frame's up turned from the world's
+        meter = self.stretch
         self.worker = CoreWorker(lambda: thinburn.Simulation(world, tris, **kwargs), self.dt,
-                                 self.want_particles, shell=self.shell)
+                                 self.want_particles, shell=self.shell,
+                                 stretch_edges=None if meter is None else (meter.edges, meter.rest))
         self.worker.start()
 
     # --- setup -------------------------------------------------------------------------------
@@ -565,9 +567,9 @@ class BakeJob:
             if kind == "built":
                 self._built(msg[1])
             elif kind == "frame":
-                _, index, positions, lit, particles = msg
+                _, index, positions, lit, particles, along = msg
                 if self.stretch is not None:
-                    self.stretch.add(positions, self.frames[index])
+                    self.stretch.add(positions, self.frames[index], along)
                 for sheet in self.sheets:
                     sheet.add(index, positions)
                 self.lit += lit

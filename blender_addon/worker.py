@@ -15,6 +15,8 @@ import numpy as np
 
 from thinburn import force_fields as fields
 
+from .stretch import ALONG_FROM
+
 
 def lick_of(ids) -> np.ndarray:
     """Per fire particle, a number in [0, 1) fixed by its birth serial number for its life (the
@@ -92,11 +94,14 @@ class CoreWorker(threading.Thread):
 
     Messages on ``results`` (tuples): ("built", shape) once the Simulation exists (its
     geometry, cells and couples: ``simulation_shape``), then ("frame", index, positions, lit,
-    particles or None), ("done", ignition_times, burnout_times), ("error", text),
-    ("cancelled",).
+    particles or None, along or None: ``along_creases``), ("done", ignition_times,
+    burnout_times), ("error", text), ("cancelled",).
+
+    stretch_edges: the stretch meter's (edges, rest lengths), for ``along_creases``.
     """
 
-    def __init__(self, make_simulation, dt: float, want_particles: bool, shell: bool = False):
+    def __init__(self, make_simulation, dt: float, want_particles: bool, shell: bool = False,
+                 stretch_edges=None):
         super().__init__(name="thinburn-bake", daemon=True)
         self._shell = shell
         self._make_simulation = make_simulation
@@ -107,6 +112,7 @@ class CoreWorker(threading.Thread):
         self._cancel = threading.Event()
         self._colliders = None  # thinburn.colliders.Colliders built from the first task that has some
         self._collider_meshes = []  # per collider: the (vertices, faces) its field was built from
+        self._stretch_edges = stretch_edges
 
     def cancel(self) -> None:
         self._cancel.set()
@@ -142,6 +148,7 @@ class CoreWorker(threading.Thread):
             lit += sim.ignite_map(task.painted, time=task.index * self._dt)
         # A fresh array per frame (the main thread keeps it), written by the core directly.
         positions = sim.vertex_positions(out=np.empty((sim.n_vertices, 3)))
+        along = self.along_creases(sim, positions)  # before the step: the same frame
         particles = None
         if self._want_particles:
             pts, temps = sim.particles()
@@ -157,7 +164,29 @@ class CoreWorker(threading.Thread):
             if task.dynamics:
                 sim.set_dynamics(**task.dynamics)
             sim.step(self._dt)
-        return ("frame", task.index, positions, lit, particles)
+        return ("frame", task.index, positions, lit, particles, along)
+
+    def along_creases(self, sim, positions):
+        """(edges, strains): the meter's edges whose chords strain past ALONG_FROM now, each
+        with |l/L - 1| of its length along the surface (Simulation.surface_lengths). Where a
+        flat sheet's lattice folds sharply between couples its surface creases along the couple
+        line, and an edge across the crease is a chord, far shorter than the sheet under it
+        (docs/lattice.md, "Creases between couples"): the sheet did not shrink there. None when
+        no edge is over, and from then on for a curved shell's control surface (it embeds
+        mesh vertices only) or a core without surface_lengths."""
+        if self._stretch_edges is None:
+            return None
+        edges, rest = self._stretch_edges
+        chord = np.linalg.norm(positions[edges[:, 0]] - positions[edges[:, 1]], axis=1) / rest
+        over = np.flatnonzero(np.abs(chord - 1.0) > ALONG_FROM)
+        if not over.size:
+            return None
+        try:
+            along = sim.surface_lengths(edges[over]) / rest[over]
+        except (AttributeError, ValueError):
+            self._stretch_edges = None
+            return None
+        return over, np.abs(along - 1.0)
 
     def _collide(self, sim, colliders: list) -> None:
         """Blender's Collision objects as the core's mesh colliders. A field is built only when
