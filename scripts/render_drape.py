@@ -42,6 +42,20 @@ import blender_helpers as H  # noqa: E402  (the scene builders the tests use)
 R, CENTRE = 0.1, (0.0, 0.0, 0.1)  # the sphere stands on the table (z = 0)
 
 
+def _unburnt_p99(sheet, rest, world, ignite):
+    """Every 24th frame (k = 0, 24, ...; Blender frame k + 1), the p99 of |l/L - 1| over the
+    edges neither of whose vertices had caught fire by that frame."""
+    edges = H.mesh_edges(sheet)
+    l0 = np.linalg.norm(rest[edges[:, 0]] - rest[edges[:, 1]], axis=1)
+    out = []
+    for k in range(0, len(world), 24):
+        keep = np.all(ignite[edges] > k + 1, axis=1)
+        f = world[k]
+        strain = np.abs(np.linalg.norm(f[edges[keep, 0]] - f[edges[keep, 1]], axis=1) / l0[keep] - 1.0)
+        out.append(round(float(np.percentile(strain, 99)), 4) if strain.size else None)
+    return out
+
+
 def _common(sheet, table, args, material):
     s = H.setup_bake(sheet, frames=args.frames, cells=args.cells, cache_dir=args.cache, floor=False)
     s.threads = 0
@@ -287,13 +301,17 @@ def bake_and_measure(name, args):
     info = {"scene": name, "frames": args.frames, "cells": args.cells, "lattice": args.lattice,
             "vertices": len(rest), "bake_s": round(time.perf_counter() - t0, 1),
             "message": job.message, "warnings": list(job.warnings),
-            "colliders": list(getattr(job, "colliders", []))}
+            "colliders": list(getattr(job, "colliders", [])),
+            # the bake's stretch meter: edges past 1 % measured along the surface (docs/blender.md)
+            "max_strain_meter": None if job.max_strain is None else round(float(job.max_strain), 4),
+            "max_strain_meter_frame": job.max_strain_frame}
     _, frames = addon.cache.read_pc2(H.cache_file(args.cache, sheet.name + ".pc2"))
     mw = np.array(sheet.matrix_world, dtype=np.float64)
     world = frames.astype(np.float64) @ mw[:3, :3].T + mw[:3, 3]
     ignite = H.point_attribute(sheet, "thinburn_ignite_time")
     info["ignited"] = int(np.count_nonzero(ignite < 1e8))
     info.update(measure(rest, world))
+    info["unburnt_edge_strain_p99_per_24_frames"] = _unburnt_p99(sheet, rest, world, ignite)
     print(json.dumps(info, indent=1), flush=True)
     return cam
 
