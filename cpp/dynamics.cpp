@@ -611,13 +611,43 @@ int LatticeDynamics::integrate(double dt, int substeps, StepStats& st) {
     }
     forget_history();  // the history was the failed try's: the redo starts with backward Euler
     ++st.stretch_redos;
+    st.substeps_by = SubstepCause::StretchRedo;
     const double grow = std::ceil(st.max_strain / kStretchRedo);
     substeps = static_cast<int>(std::min<double>(p_.max_substeps, substeps * std::max(2.0, grow)));
   }
 }
 
-int LatticeDynamics::choose_substeps(double dt, double omega, double c_eff) const {
-  if (p_.substeps > 0) return p_.substeps;
+const char* substep_cause_name(SubstepCause c) {
+  switch (c) {
+    case SubstepCause::None: return "none";
+    case SubstepCause::Set: return "set";
+    case SubstepCause::One: return "one";
+    case SubstepCause::Stability: return "stability";
+    case SubstepCause::Accuracy: return "accuracy";
+    case SubstepCause::Contact: return "contact";
+    case SubstepCause::StretchRedo: return "stretch_redo";
+  }
+  return "none";
+}
+
+namespace {
+// The larger of a rule's need and the contacts', and which one it was (One when neither
+// asks for more than a substep).
+int larger_need(double rule, SubstepCause rule_cause, int contact, SubstepCause* cause) {
+  if (contact > 1 && contact >= rule) {
+    *cause = SubstepCause::Contact;
+    return contact;
+  }
+  *cause = rule > 1.0 ? rule_cause : SubstepCause::One;
+  return static_cast<int>(std::max(1.0, rule));
+}
+}  // namespace
+
+int LatticeDynamics::choose_substeps(double dt, double omega, double c_eff, SubstepCause* cause) const {
+  if (p_.substeps > 0) {
+    *cause = SubstepCause::Set;
+    return p_.substeps;
+  }
   if (!is_implicit(p_.integrator)) {
     const double h = p_.safety * explicit_stability_limit(p_.integrator, omega, c_eff);
     const double need = std::ceil(dt / h);
@@ -628,7 +658,7 @@ int LatticeDynamics::choose_substeps(double dt, double omega, double c_eff) cons
           " substeps (largest frequency " + std::to_string(omega) + " rad/s, stable substep " +
           std::to_string(h) + " s), more than max_substeps = " + std::to_string(p_.max_substeps) +
           "; use the Implicit integrator or raise max_substeps");
-    return std::max({1, static_cast<int>(need), contacts_.contact_substeps(dt)});
+    return larger_need(need, SubstepCause::Stability, contacts_.contact_substeps(dt), cause);
   }
   // Implicit: one Newton step per substep is accurate while no spring changes length by more
   // than max_stretch of its rest length in a substep.
@@ -643,8 +673,8 @@ int LatticeDynamics::choose_substeps(double dt, double omega, double c_eff) cons
       const double rel = (vel_.row(v) + drift_.row(v) - vel_.row(o) - drift_.row(o)).norm();
       ratio = std::max(ratio, rel * dt / (p_.max_stretch * len));
     }
-  const double need = std::max(std::ceil(ratio), double(contacts_.contact_substeps(dt)));
-  return static_cast<int>(std::clamp(need, 1.0, double(p_.max_substeps)));
+  const double accuracy = std::min(std::ceil(ratio), double(p_.max_substeps));
+  return larger_need(accuracy, SubstepCause::Accuracy, contacts_.contact_substeps(dt), cause);
 }
 
 void LatticeDynamics::explicit_substep(double h, bool paper) {
@@ -894,7 +924,8 @@ StepStats LatticeDynamics::step(double dt, const Eigen::VectorXd& D, const Eigen
       st.passes = pass;
       st.awake = static_cast<int>(active_.size());
       st.omega_max = omega_bound(active_);
-      st.substeps = active_.empty() ? 0 : choose_substeps(dt, st.omega_max, max_damping_rate());
+      st.substeps_by = SubstepCause::None;
+      st.substeps = active_.empty() ? 0 : choose_substeps(dt, st.omega_max, max_damping_rate(), &st.substeps_by);
       if (!plastic_done && plastic) apply_plasticity();
       plastic_done = true;
       for (int a = 0; a < st.awake; ++a) {

@@ -125,6 +125,20 @@ void set_material(DynamicsParams& p, double k_structure, double k_shear, double 
 /// amplification matrix <= 1 (bisection). Undamped: Symplectic 2 / omega, Explicit sqrt(2) / omega.
 double explicit_stability_limit(Integrator integrator, double omega, double c);
 
+/// @brief What set a step's substeps (issue #12: substeps where accuracy needs them, and the
+/// step says why). The last pass's; a redo overrides the count it started from.
+enum class SubstepCause {
+  None,         ///< nothing awake: no substep
+  Set,          ///< DynamicsParams::substeps, the caller's fixed count
+  One,          ///< nothing asked for more than one
+  Stability,    ///< an explicit integrator's stability limit (Explicit, Symplectic)
+  Accuracy,     ///< implicit: a spring would change by more than max_stretch in a substep
+  Contact,      ///< a vertex near a collider must not fall through it (Contacts::contact_substeps)
+  StretchRedo,  ///< the step ended with a spring overstretched and was redone with more
+};
+/// @brief "none", "set", "one", "stability", "accuracy", "contact", "stretch_redo".
+const char* substep_cause_name(SubstepCause c);
+
 /// @brief What one step did.
 struct StepStats {
   int substeps = 0;       ///< substeps taken
@@ -138,6 +152,7 @@ struct StepStats {
   int stretch_redos = 0;  ///< integrations redone with more substeps because a spring overstretched
   int strain_limited = 0; ///< couple pairs the strain limit put back on its bound, all substeps and passes
   int sample_contacts = 0; ///< shell samples the colliders pushed out (set_colliders' samples), all substeps and passes
+  SubstepCause substeps_by = SubstepCause::None;  ///< what set `substeps`
 };
 
 /// @brief Springs, forces and integration of an FfdLattice's control vertices.
@@ -263,7 +278,7 @@ class LatticeDynamics {
   double free_speed(int v, double dt) const;
   double held_speed(int v, double dt) const;
   Eigen::Vector3d couple_normal(int v, const RowMatX3& x) const;
-  int choose_substeps(double dt, double omega, double c_eff) const;
+  int choose_substeps(double dt, double omega, double c_eff, SubstepCause* cause) const;
   int integrate(double dt, int substeps, StepStats& st);
   double max_active_strain() const;
   double max_damping_rate() const;

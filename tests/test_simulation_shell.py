@@ -703,3 +703,39 @@ def test_surface_lengths_are_chords_in_one_piece_and_rest_lengths_in_a_fall(a4):
         sim.surface_lengths(e, samples=0)
     with pytest.raises(ValueError, match="edges"):
         sim.surface_lengths(f)
+
+
+def test_step_stats_say_what_set_the_substeps(a4):
+    """Issue #12: substeps where accuracy needs them, and step_stats() says why."""
+    def stats(sim, steps=1, dt=1 / 24):
+        out = []
+        for _ in range(steps):
+            sim.step(dt)
+            s = sim.step_stats()
+            out.append((s["substeps_by"], s["substeps"]))
+        return out
+
+    v, f = a4
+    # A sheet on its floor: one substep, then it sleeps and none.
+    assert stats(thinburn.Simulation(v, f, cells=32, floor=0.0), 3) == [("one", 1), ("none", 0), ("none", 0)]
+    assert stats(thinburn.Simulation(v, f, cells=32, substeps=3)) == [("set", 3)]
+    by, n = stats(thinburn.Simulation(v, f, cells=32, integrator="symplectic"))[0]
+    assert by == "stability" and n > 1  # measured 190
+    # Repro r4's cloth pinned at a corner: from rest one substep; once it swings, a spring
+    # would change by more than max_stretch in one (measured 71 substeps).
+    cloth_v, cloth_f = rect_sheet(1.0, 2.0, nx=6, ny=11)
+    pin = np.zeros(len(cloth_v), bool)
+    pin[0] = True
+    swing = thinburn.Simulation(cloth_v, cloth_f, material="cloth", cells=32, pinned=pin, max_stretch=1e-3)
+    first, second = stats(swing, 2)
+    assert first == ("one", 1) and second[0] == "accuracy" and second[1] > 1
+    # One 2 s step from rest overstretches and is redone (measured 3198 substeps).
+    big = thinburn.Simulation(cloth_v, cloth_f, material="cloth", cells=32, pinned=pin)
+    by, n = stats(big, dt=2.0)[0]
+    assert by == "stretch_redo" and n > 1 and big.step_stats()["stretch_redos"] > 0
+    # A cloth falling onto a sphere: steps near it take the contacts' substeps.
+    drop_v, drop_f = rect_sheet(0.4, 0.4, nx=21, ny=21, z=0.5)
+    drop_v[:, :2] -= 0.2
+    drop = thinburn.Simulation(drop_v, drop_f, material="cloth", cells=32)
+    drop.set_colliders(spheres=[dict(centre=(0.0, 0.0, 0.2), radius=0.1)])
+    assert any(by == "contact" and n > 1 for by, n in stats(drop, 24))

@@ -60,8 +60,10 @@ void define_dynamics(py::module_& m) {
       .def_readonly("strain_limited", &StepStats::strain_limited, "Couple pairs put back on the strain limit, all substeps and passes.")
       .def_readonly("sample_contacts", &StepStats::sample_contacts, "Shell samples the colliders pushed out, all substeps and passes.")
       .def_readonly("passes", &StepStats::passes)
+      .def_property_readonly("substeps_by", [](const StepStats& s) { return substep_cause_name(s.substeps_by); },
+                             "What set the substeps: none, set, one, stability, accuracy, contact, stretch_redo.")
       .def("__repr__", [](const StepStats& s) {
-        return "StepStats(substeps=" + std::to_string(s.substeps) + ", awake=" +
+        return "StepStats(substeps=" + std::to_string(s.substeps) + " by " + substep_cause_name(s.substeps_by) + ", awake=" +
                std::to_string(s.awake) + ", cg_iterations=" + std::to_string(s.cg_iterations) +
                ", omega_max=" + std::to_string(s.omega_max) + ", passes=" +
                std::to_string(s.passes) + ")";

@@ -254,7 +254,8 @@ void define_simulation(py::module_& m) {
                         py::arg("ldlt_solves") = t.ldlt_solves,
                         py::arg("max_strain") = t.max_strain, py::arg("stretch_redos") = t.stretch_redos,
                         py::arg("strain_limited") = t.strain_limited,
-                        py::arg("sample_contacts") = t.sample_contacts);
+                        py::arg("sample_contacts") = t.sample_contacts,
+                        py::arg("substeps_by") = substep_cause_name(t.substeps_by));
       })
       .def("frame", [](const S& s) {
         const SheetFrame& f = s.sheet().frame();

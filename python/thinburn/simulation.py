@@ -549,7 +549,12 @@ class Simulation:
         _set_group(self._sim.set_dynamics, None, params)
 
     def step_stats(self) -> dict:
-        """What the last step's motion did: substeps, awake vertices, CG iterations, ω bound."""
+        """What the last step's motion did: substeps, awake vertices, CG iterations, ω bound,
+        and ``substeps_by``, what set the substeps: "none" (nothing awake), "set" (the
+        ``substeps`` parameter), "one" (nothing asked for more), "stability" (an explicit
+        integrator's limit), "accuracy" (implicit: a spring would change by more than
+        ``max_stretch`` in a substep), "contact" (a vertex near a collider) or "stretch_redo"
+        (the step overstretched a spring and was redone with more; docs/dynamics.md §4)."""
         self._require_shell("step_stats")
         return dict(self._sim.step_stats())
 
