@@ -5,8 +5,7 @@ shrinks to half) in a baked frame means the motion misbehaved there (a lattice t
 the shell's shape, or more crumpling than its couples can carry). The bake measures every
 edge in every frame, on the main thread as the frames come in, and keeps per edge the
 largest strain and its frame; edges between burnt-out vertices (holes, ash) do not count.
-An edge across a crease of a flat sheet's lattice is a chord, far shorter than the sheet under
-it: for such edges the bake's worker measures the length along the surface (worker.py,
+An edge across a crease of the lattice is a chord, far shorter than the sheet under it: for such edges the bake's worker measures the length along the surface (worker.py,
 ``along_creases``), and that counts.
 """
 from __future__ import annotations

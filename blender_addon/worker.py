@@ -172,8 +172,7 @@ class CoreWorker(threading.Thread):
         flat sheet's lattice folds sharply between couples its surface creases along the couple
         line, and an edge across the crease is a chord, far shorter than the sheet under it
         (docs/lattice.md, "Creases between couples"): the sheet did not shrink there. None when
-        no edge is over, and from then on for a curved shell's control surface (it embeds
-        mesh vertices only) or a core without surface_lengths."""
+        no edge is over, and from then on with a core without surface_lengths."""
         if self._stretch_edges is None:
             return None
         edges, rest = self._stretch_edges

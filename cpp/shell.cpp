@@ -197,6 +197,7 @@ Shell::Shell(const SurfaceCells& cells, const RowMatX3& vertices, const RowMatX3
     rebuild(std::max(kFitStep * spacing, coarsest / kMaxFitRefine));
     refined = true;
   }
+  vertex_seed_ = vertex_seed;
   lattice_ = std::make_unique<FfdLattice>(FfdLattice::on_surface(control_->couples(), control_->rest()));
   RowMatX3 centres(cells.size(), 3);
   for (int c = 0; c < cells.size(); ++c) centres.row(c) = cells.positions()[c].transpose();
@@ -737,9 +738,23 @@ void Shell::vertex_positions_into(Eigen::Ref<RowMatX3> out) const {
 
 void Shell::mesh_points(const Eigen::Ref<const RowMatXi>& idx, const Eigen::Ref<const RowMatXd>& w,
                         RowMatX3& out) const {
-  if (control_)
-    throw std::invalid_argument("mesh_points: needs a flat sheet's grid lattice (geometry=\"plane\"); this "
-                                "shell's lattice follows a control surface, which embeds mesh vertices only");
+  const double z_min = params_.has_floor ? params_.floor_z : -std::numeric_limits<double>::infinity();
+  if (control_) {
+    const Eigen::Index n = idx.rows();
+    RowMatX3 rest = RowMatX3::Zero(n, 3);
+    std::vector<int> seeds(static_cast<std::size_t>(n), -1);
+    for (Eigen::Index i = 0; i < n; ++i) {
+      Eigen::Index heaviest = 0;
+      for (Eigen::Index k = 0; k < idx.cols(); ++k) {
+        rest.row(i) += w(i, k) * surface_vertices_.rest.row(idx(i, k));
+        if (w(i, k) > w(i, heaviest)) heaviest = k;
+      }
+      if (idx.cols() > 0) seeds[std::size_t(i)] = vertex_seed_[std::size_t(idx(i, heaviest))];
+    }
+    std::lock_guard<std::mutex> lock(mesh_mutex_);
+    control_->deform(control_->embed(rest, seeds), lattice_->positions(), out, z_min);
+    return;
+  }
   const RowMatX2& param = sheet_->vertex_param();
   const RowMatX3& verts = sheet_->vertices();
   const Eigen::Index n = idx.rows();
@@ -758,7 +773,6 @@ void Shell::mesh_points(const Eigen::Ref<const RowMatXi>& idx, const Eigen::Ref<
   // The same map as vertex_positions, without its cache (whose tolerance would blur a
   // measure taken along an edge).
   std::lock_guard<std::mutex> lock(mesh_mutex_);
-  const double z_min = params_.has_floor ? params_.floor_z : -std::numeric_limits<double>::infinity();
   out.resize(n, 3);
   lattice_->deform(lattice_->embed(coords, rest, mesh_interp_), out, z_min);
   if (fold_blend_ && mesh_follows_folds_)

@@ -122,10 +122,11 @@ class Shell {
   void vertex_positions(RowMatX3& out) const;
   /// @brief The same into a caller's n x 3 rows (no allocation on a grid lattice).
   void vertex_positions_into(Eigen::Ref<RowMatX3> out) const;
-  /// @brief Grid lattice: where points of the rest mesh are now, mapped as its vertices are
-  /// (the spline, where the lattice folds its couples, the floor). Row i of the rest points is
-  /// sum_k w(i, k) * vertex idx(i, k) at rest (indices checked by the caller). Throws
-  /// std::invalid_argument on a control surface, whose embedding is per mesh vertex.
+  /// @brief Where points of the rest mesh are now, mapped as its vertices are: on a grid
+  /// lattice the spline, where the lattice folds its couples, and the floor; on a control
+  /// surface each point embedded as a vertex is (from the seed of its weightiest vertex), and
+  /// the floor. Row i of the rest points is sum_k w(i, k) * vertex idx(i, k) at rest (indices
+  /// checked by the caller).
   void mesh_points(const Eigen::Ref<const RowMatXi>& idx, const Eigen::Ref<const RowMatXd>& w,
                    RowMatX3& out) const;
   /// @brief Mesh vertices the last vertex_positions call recomputed (a grid lattice keeps the
@@ -184,6 +185,7 @@ class Shell {
   const Sheet* sheet_ = nullptr;              // grid lattice
   std::unique_ptr<ControlSurface> control_;   // control surface
   SurfaceEmbedding surface_vertices_, surface_cells_;
+  std::vector<int> vertex_seed_;               // control surface: per mesh vertex, its embedding's seed couple
   std::vector<double> cell_area_;
   std::vector<int> piece_of_;                  // per couple, its connected piece
   std::vector<int> cell_piece_;                // control surface: per fire cell, its piece

@@ -676,9 +676,9 @@ class Simulation:
     def mesh_points(self, vertices, weights) -> np.ndarray:
         """(n, 3) where material points of the mesh are now: row i at rest is
         ``sum_k weights[i, k] * rest vertex vertices[i, k]`` (a point of a face or an edge, its
-        weights summing to 1), mapped as the mesh's vertices are (a flat sheet's lattice; on a
-        control surface, ``geometry="surface"``, a ValueError). A measure of the surface
-        between the vertices: ``thinburn._mesh_measures.SurfaceStrain`` takes each edge's
+        weights summing to 1), mapped as the mesh's vertices are (on a curved shell's control
+        surface, each point embedded as a vertex is, from its weightiest vertex's couples). A
+        measure of the surface between the vertices: ``surface_lengths`` takes each edge's
         length along it (docs/lattice.md, "Creases between couples")."""
         idx = V.index_array(vertices, "vertices", (-1, -1), self.n_vertices)
         w = V.real_array(weights, "weights", idx.shape)
@@ -691,7 +691,7 @@ class Simulation:
         """(n,) each edge's length along the sheet's surface now: its rest segment between the
         vertices ``edges[i]`` in ``samples`` pieces through ``mesh_points``. Where the lattice
         creases between couples an edge across the crease is a chord, shorter than this
-        (docs/lattice.md, "Creases between couples"). A flat sheet's lattice only."""
+        (docs/lattice.md, "Creases between couples")."""
         e = V.index_array(edges, "edges", (-1, 2), self.n_vertices)
         k = V.integer(samples, "samples", low=1)
         t = np.linspace(0.0, 1.0, k + 1)
