@@ -678,6 +678,12 @@ def test_mesh_points_name_what_is_wrong(a4):
         sim.mesh_points([[0, len(v)]], [[0.5, 0.5]])
     with pytest.raises(ValueError, match="sum to 1"):
         sim.mesh_points([[0, 1]], [[0.5, 0.6]])
+    with pytest.raises(ValueError, match=">= 0"):
+        sim.mesh_points([[0, 1]], [[2.0, -1.0]])
+    assert sim.mesh_points(np.zeros((0, 2), int), np.zeros((0, 2))).shape == (0, 3)
+    # Without a shell the sheet keeps its rest shape: the weighted rest points.
+    still = thinburn.Simulation(v, f, cells=32, shell=False)
+    np.testing.assert_array_equal(still.mesh_points([[0, 1]], [[0.25, 0.75]]), [0.25 * v[0] + 0.75 * v[1]])
 
 
 def test_mesh_points_on_a_curved_shell():

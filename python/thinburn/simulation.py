@@ -682,7 +682,9 @@ class Simulation:
         length along it (docs/lattice.md, "Creases between couples")."""
         idx = V.index_array(vertices, "vertices", (-1, -1), self.n_vertices)
         w = V.real_array(weights, "weights", idx.shape)
-        if w.size and not np.allclose(w.sum(axis=1), 1.0, rtol=0.0, atol=1e-9):
+        if w.size and w.min() < 0.0:
+            raise ValueError(f"weights: must be >= 0 (a point between its vertices), got {w.min():g}")
+        if len(w) and not np.allclose(w.sum(axis=1), 1.0, rtol=0.0, atol=1e-9):
             raise ValueError("weights: each row must sum to 1 (a point between its vertices), got sums "
                              f"from {w.sum(axis=1).min():g} to {w.sum(axis=1).max():g}")
         return self._sim.mesh_points(idx, w)
