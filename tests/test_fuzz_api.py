@@ -44,6 +44,8 @@ def test_random_scenes_give_finite_results(mesh, cells, material, front, shell, 
     for _ in range(steps):
         sim.step(dt)
     assert np.all(np.isfinite(sim.vertex_positions()))
+    from thinburn._mesh_measures import mesh_edges
+    assert np.all(np.isfinite(sim.surface_lengths(mesh_edges(f), samples=2)))
     char = sim.vertex_char()
     assert np.all((char >= 0) & (char <= 1))
     states = sim.cell_states()
