@@ -567,9 +567,12 @@ class BakeJob:
             if kind == "built":
                 self._built(msg[1])
             elif kind == "frame":
-                _, index, positions, lit, particles, along = msg
+                _, index, positions, lit, particles, strains = msg
                 if self.stretch is not None:
-                    self.stretch.add(positions, self.frames[index], along)
+                    if strains is None:
+                        self.stretch.add(positions, self.frames[index])
+                    else:
+                        self.stretch.add_strains(*strains, self.frames[index])
                 for sheet in self.sheets:
                     sheet.add(index, positions)
                 self.lit += lit

@@ -2,11 +2,11 @@
 
 Paper and cloth hardly stretch: an edge of the mesh that grows to 1.5× its rest length (or
 shrinks to half) in a baked frame means the motion misbehaved there (a lattice too coarse for
-the shell's shape, or more crumpling than its couples can carry). The bake measures every
-edge in every frame, on the main thread as the frames come in, and keeps per edge the
-largest strain and its frame; edges between burnt-out vertices (holes, ash) do not count.
-An edge across a crease of the lattice is a chord, far shorter than the sheet under it: for such edges the bake's worker measures the length along the surface (worker.py,
-``along_creases``), and that counts.
+the shell's shape, or more crumpling than its couples can carry). The bake's worker measures
+every edge in every frame (worker.py, ``edge_strains``), and the meter keeps per edge the
+largest strain and its frame; edges between burnt-out vertices (holes, ash) do not count. An
+edge across a crease of the lattice is a chord, far shorter than the sheet under it: for such
+edges the worker measures the length along the surface, and that counts.
 """
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ import numpy as np
 
 WARN_STRAIN = 0.5  # |length / rest length - 1| above which the bake's report warns
 # Edges whose chords strain past this are measured along the surface as well (worker.py,
-# along_creases), so the report and the Bake panel's "edges stretched up to" are the sheet's.
+# edge_strains), so the report and the Bake panel's "edges stretched up to" are the sheet's.
 ALONG_FROM = 0.01
 
 
@@ -32,16 +32,16 @@ class StretchMeter:
         self.worst_frame = np.zeros(len(self.edges))
         self.creased = 0  # the most edges in a frame measured along the surface, not as chords
 
-    def add(self, positions: np.ndarray, frame: float, along=None) -> None:
-        """One frame's positions; along: (edges, strains) that replace those edges' chord
-        strains with their strains along the surface (worker.CoreWorker.along_creases)."""
+    def add(self, positions: np.ndarray, frame: float) -> None:
+        """One frame's positions, every edge measured as a chord."""
         p = np.asarray(positions, dtype=np.float64)
         e = self.edges
-        strain = np.abs(np.linalg.norm(p[e[:, 0]] - p[e[:, 1]], axis=1) / self.rest - 1.0)
-        if along is not None:
-            ids, on_surface = along
-            self.creased = max(self.creased, len(ids))
-            strain[ids] = on_surface
+        self.add_strains(np.abs(np.linalg.norm(p[e[:, 0]] - p[e[:, 1]], axis=1) / self.rest - 1.0), 0, frame)
+
+    def add_strains(self, strain: np.ndarray, creased: int, frame: float) -> None:
+        """One frame's |l/L - 1| per edge, `creased` of them measured along the surface (the
+        bake's worker: worker.CoreWorker.edge_strains)."""
+        self.creased = max(self.creased, int(creased))
         more = strain > self.worst
         self.worst[more] = strain[more]
         self.worst_frame[more] = frame

@@ -252,10 +252,10 @@ def test_stretch_meter_and_its_warning(addon):
     assert "3.0× its rest length at frame 9" in text and "Motion Detail" in text
     assert "lower Crumple Amount" in text
     assert addon.stretch.stretch_warning("Letter", 0.2, 5.0, 0) is None
-    # Edges measured along the surface (the worker's along_creases) replace their chords.
-    meter.add(np.array([[0, 0, 0], [1, 0, 0], [1, 0.01, 0.0]]), 12, along=(np.array([1]), np.array([0.02])))
+    # The bake's worker sends each frame's strains, some measured along the surface.
+    meter.add_strains(np.array([0.01, 0.02]), 1, 12)
     assert meter.creased == 1
-    assert meter.largest() == pytest.approx((2.0, 9.0))  # the 99 % chord did not count
+    assert meter.largest() == pytest.approx((2.0, 9.0))
     # A curved shell whose mesh lies off its lattice (lattice fit > 1) is told so; a Crumple
     # Amount already at 0.3 is not told to go to 0.3.
     text = addon.stretch.stretch_warning("Curtain", 0.8, 24.0, 0, crumple=0.3, fit=1.47, couples=100)
