@@ -179,8 +179,8 @@ class CoreWorker(threading.Thread):
         between couples its surface creases along the couple line, and an edge across the
         crease is a chord, far shorter than the sheet under it (docs/lattice.md, "Creases
         between couples"): the sheet did not shrink there. None without stretch edges. Here,
-        not on the main thread, and by squared lengths: 0.7 ms a frame for a 16k mesh's 48k
-        edges, where the meter's own pass took 2.4 ms."""
+        not on the main thread, and with np.take and einsum rather than fancy indexing and
+        norm (about a third of the time in a probe on a 16k mesh's 48k edges)."""
         if self._stretch_edges is None:
             return None
         e0, e1, rest = self._stretch_edges
