@@ -170,11 +170,13 @@ void define_simulation(py::module_& m) {
            },
            py::arg("out").noconvert(), py::arg("threads"))
       .def("mesh_points",
-           [](const S& s, const RowMatXi& idx, const RowMatXd& w) {
+           [](const S& s, const RowMatXi& idx, const RowMatXd& w, int threads) {
+             // Its deform runs in parallel as vertex_positions' does: the Simulation's count.
              py::gil_scoped_release release;
+             ScopedThreads scope(threads);
              return s.mesh_points(idx, w);
            },
-           py::arg("vertices"), py::arg("weights"))
+           py::arg("vertices"), py::arg("weights"), py::arg("threads"))
       .def("mesh_points_redone", [](const S& s) { return s.shell() ? s.shell()->mesh_points_redone() : -1L; })
       .def("vertex_char", &S::vertex_char)
       .def("vertex_ignition_times", &S::vertex_ignition_times)

@@ -687,7 +687,7 @@ class Simulation:
         if len(w) and not np.allclose(w.sum(axis=1), 1.0, rtol=0.0, atol=1e-9):
             raise ValueError("weights: each row must sum to 1 (a point between its vertices), got sums "
                              f"from {w.sum(axis=1).min():g} to {w.sum(axis=1).max():g}")
-        return self._sim.mesh_points(idx, w)
+        return self._sim.mesh_points(idx, w, self._threads)
 
     def surface_lengths(self, edges, samples=16) -> np.ndarray:
         """(n,) each edge's length along the sheet's surface now: its rest segment between the
