@@ -312,6 +312,9 @@ def bake_and_measure(name, args):
     info["ignited"] = int(np.count_nonzero(ignite < 1e8))
     info.update(measure(rest, world))
     info["unburnt_edge_strain_p99_per_24_frames"] = _unburnt_p99(sheet, rest, world, ignite)
+    if args.export_scene is not None:  # the scene as a file: python scripts/replay_strain.py FILE
+        args.export_scene.mkdir(parents=True, exist_ok=True)
+        info["scene_file"] = addon.scene_export.write_scene(sheet, str(args.export_scene / f"{name}.npz"))
     print(json.dumps(info, indent=1), flush=True)
     return cam
 
@@ -352,6 +355,8 @@ def main(argv=None) -> int:
     ap.add_argument("--wind", type=float, default=2.0, help="silk: the Wind field's Strength")
     ap.add_argument("--table-floor", action="store_true",
                     help="table: the cube is the sheet's Floor Object instead of a Collision object")
+    ap.add_argument("--export-scene", type=Path, default=None, metavar="DIR",
+                    help="also write each scene as a scene file DIR/<scene>.npz (thinburn.scenefile)")
     ap.add_argument("--without-addon", action="store_true",
                     help="also save, disable the add-on, reopen and render (drape_<scene>_noaddon_<frame>)")
     ap.add_argument("--render", type=int, nargs="*", default=[12, 48, 144], help="frames to render")

@@ -1,0 +1,45 @@
+"""Replay a scene file (thinburn.scenefile, as the add-on exports it) in the core and print
+how its unburnt mesh stretches: every `--every` frames the p99 of |l/L - 1| over edges whose
+two vertices are unburnt, as chords (the mesh) and along the surface (SurfaceStrain), the worst
+edge along the surface, the lowest couple centre (mm) and the burning cells. The Blender pile's
+strain reproduced outside Blender (docs/blender.md, "pile"):
+
+    python scripts/render_drape.py --scenes pile --frames 120 --render --export-scene /tmp/scenes
+    python scripts/replay_strain.py /tmp/scenes/pile.npz
+"""
+import argparse
+
+import numpy as np
+
+from thinburn import scenefile, wedge
+from thinburn._mesh_measures import EdgeStrain, SurfaceStrain
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("scene", help="a scene file (.npz or .json)")
+    ap.add_argument("--every", type=int, default=12, help="frames between measures")
+    a = ap.parse_args()
+    spec = scenefile.load_scene(a.scene)
+    sim, _, fps, frames = wedge.simulation_for(spec, {})
+    v, f = np.asarray(spec.vertices), np.asarray(spec.faces)
+    chord, surface = EdgeStrain(v, f), SurfaceStrain(v, f)
+    e = chord.edges
+    print(f"{a.scene}: {frames} frames at {fps:g} fps, lattice {sim.lattice_size}, {sim.lattice_couples} couples")
+
+    def measure(k, s):
+        if k % a.every:
+            return
+        char = s.vertex_char()
+        keep = (char[e[:, 0]] == 0) & (char[e[:, 1]] == 0)
+        on_surface = surface(s)[keep]
+        lowest = 1000 * s.lattice_positions().reshape(-1, 2, 3).mean(axis=1)[:, 2].min()
+        print(f"frame index {k:4d}: unburnt p99 chords {100 * np.percentile(chord(s.vertex_positions())[keep], 99):5.2f} %, "
+              f"along the surface {100 * np.percentile(on_surface, 99):5.2f} % (worst edge {100 * on_surface.max():5.1f} %), "
+              f"lowest couple centre {lowest:6.2f} mm, burning cells {int((s.cell_states() == 1).sum())}", flush=True)
+
+    wedge.run_frames(sim, spec, fps, frames, measure)
+
+
+if __name__ == "__main__":
+    main()
