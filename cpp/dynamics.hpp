@@ -70,6 +70,7 @@ struct DynamicsParams {
   double friction = 0.5;       ///< Coulomb coefficient on the floor (>= 0)
   bool self_collision = true;  ///< couples keep self_distance from the sheet's other layers (self_contact.hpp)
   double self_distance = 1.0;  ///< lattice thicknesses between a couple's mid-point and another part of the sheet (> 0)
+  int contact_rounds = 3;      ///< while layers touch, turns of strain limit, floor and self-contact after a substep's self-contact (0: once, last)
   /// Largest |l / L - 1| of the distance between neighbouring couples' centres, kept after each
   /// substep (strain_limit.hpp); 0: no limit, in [0, 1).
   double strain_limit = 0.0;

@@ -5,7 +5,7 @@ edge along the surface, the lowest couple centre (mm) and the burning cells. The
 strain reproduced outside Blender (docs/blender.md, "pile"):
 
     python scripts/render_drape.py --scenes pile --frames 120 --render --export-scene /tmp/scenes
-    python scripts/replay_strain.py /tmp/scenes/pile.npz
+    python scripts/replay_strain.py /tmp/scenes/pile.npz [--dynamics contact_rounds=0]
 """
 import argparse
 
@@ -19,9 +19,13 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("scene", help="a scene file (.npz or .json)")
     ap.add_argument("--every", type=int, default=12, help="frames between measures")
+    ap.add_argument("--dynamics", nargs="*", default=[], metavar="KEY=VALUE",
+                    help="set_dynamics overrides, e.g. contact_rounds=0")
     a = ap.parse_args()
     spec = scenefile.load_scene(a.scene)
     sim, _, fps, frames = wedge.simulation_for(spec, {})
+    if a.dynamics:
+        sim.set_dynamics(**{k: float(v) if "." in v else int(v) for k, v in (kv.split("=") for kv in a.dynamics)})
     v, f = np.asarray(spec.vertices), np.asarray(spec.faces)
     chord, surface = EdgeStrain(v, f), SurfaceStrain(v, f)
     e = chord.edges
@@ -39,6 +43,7 @@ def main():
               f"lowest couple centre {lowest:6.2f} mm, burning cells {int((s.cell_states() == 1).sum())}", flush=True)
 
     wedge.run_frames(sim, spec, fps, frames, measure)
+    print("seconds per phase:", {k: round(v, 2) for k, v in sim.phase_seconds().items()})
 
 
 if __name__ == "__main__":

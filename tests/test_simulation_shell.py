@@ -74,17 +74,18 @@ def test_a_sheet_landing_on_its_edge_keeps_its_bottom_row(material, bound):
     assert worst < bound
 
 
-@pytest.mark.parametrize("material, median_bound", [("cloth", 0.010), ("silk", 0.09)])
+@pytest.mark.parametrize("material, median_bound", [("cloth", 0.025), ("silk", 0.035)])
 def test_a_fabric_collapsing_into_a_pile_keeps_its_edge_lengths(material, median_bound):
-    """A 20 cm fabric dropped upright (cells 128: 9 x 9 couples) collapses into a pile 2-3 cm
+    """A 20 cm fabric dropped upright (cells 128: 9 x 9 couples) collapses into a pile 1-3 cm
     high, its lattice folded through up to 107 degrees between couples. Where the lattice
     folds the mesh follows the couples (FoldBlend); on the B-spline alone, which cuts each
     fold's corner, one drop's p99 |l/L - 1| after 4 s was 32.0 % (cloth) and 61.9 % (silk).
-    A pile is chaotic: a change in the solver's rounding moved one drop from 1.13 % to 4.77 %
-    while the others barely moved, so this takes the median over six drop heights (z0 = 5.0 ..
-    6.0 cm, `python scripts/pile_ensemble.py --sizes 0.2`): measured 0.66 % (cloth; 1.10 % at
-    commit 4766db8) and 7.53 % (silk; 5.58 %; silk piles are crushed, README "Known
-    limitations"), and every drop under 16 % (measured at most 4.77 and 14.84 %)."""
+    A pile is chaotic, so this takes the median over six drop heights (z0 = 5.0 .. 6.0 cm,
+    `python scripts/pile_ensemble.py --sizes 0.2`). Since the strain limit and self-contact
+    take turns while layers touch (docs/dynamics.md §3.4): cloth 0.65-2.98 %, median 2.13 %
+    (0.66 % before, but one drop 4.77 %: its bottom row now sits at the 3 % limit in three
+    drops), silk 2.27-4.91 %, median 3.17 % (7.53 % before, drops up to 14.8 %). Issue #12
+    asks 5 % of fabrics: every drop must stay under 5.5 %."""
     from thinburn._mesh_measures import EdgeStrain
     strains = []
     for k in range(6):
@@ -92,10 +93,10 @@ def test_a_fabric_collapsing_into_a_pile_keeps_its_edge_lengths(material, median
         sim = thinburn.Simulation(v, f, material=material, cells=128, floor=0.0)
         sim.run(4.0, dt=1 / 24)
         x = sim.vertex_positions()
-        assert x[:, 2].max() < 0.05  # it collapsed (from 25 cm; measured 0.6-4.2 cm)
+        assert x[:, 2].max() < 0.05  # it collapsed (from 25 cm; median heights 2.8 cm cloth, 1.2 cm silk)
         strains.append(np.percentile(EdgeStrain(v, f)(x), 99))
     assert np.median(strains) < median_bound
-    assert max(strains) < 0.16
+    assert max(strains) < 0.055
 
 
 def test_a_folding_fabric_is_the_same_on_one_and_two_threads():
@@ -607,10 +608,10 @@ def test_a_large_fabric_pile_keeps_its_surface_and_creases_between_couples(mater
     """A 40 cm fabric dropped upright folds its 9 x 9 couples (5 cm apart) through up to 180
     degrees between neighbours: the lattice creases along a couple line. An edge of the mesh
     across a crease is a chord, shorter than the surface under it (a 108 degree crease takes
-    41 % off an edge straddling it evenly), so the mesh's edges end 8-24 % short for cloth and
-    98-99 % for silk (p99, six drops), while the surface keeps its length: p99 of each edge's
-    length along it (SurfaceStrain, 16 pieces) measured 0.59-3.66 %, median 0.69 % (cloth)
-    and 0.74 % (silk; `python scripts/pile_ensemble.py --sizes 0.4`; docs/lattice.md,
+    41 % off an edge straddling it evenly), so the mesh's edges end up to 24 % short for cloth
+    and 98-99 % for silk (p99, six drops), while the surface keeps its length: p99 of each
+    edge's length along it (SurfaceStrain, 16 pieces) measured 0.69-1.42 %, median 0.70 %
+    (cloth) and 0.78 % (silk; `python scripts/pile_ensemble.py --sizes 0.4`; docs/lattice.md,
     "Creases between couples"). Bounds: median 1 %, every drop 5 %; and every edge that is
     more than 1 % shorter than its surface crosses a couple line or ends on the floor, where
     the mesh is clamped."""
@@ -637,7 +638,7 @@ def test_a_large_fabric_pile_keeps_its_surface_and_creases_between_couples(mater
         assert np.all((crosses | floored)[shorter])
     assert np.median(surface) < 0.01
     assert max(surface) < 0.05
-    assert np.median(chord) > 0.05  # the chords are what the mesh loses (measured 20.6 %, 98.9 %)
+    assert np.median(chord) > 0.05  # the chords are what the mesh loses (measured 9.1 %, 99.4 %)
 
 
 def test_mesh_points_map_points_of_the_mesh_as_its_vertices(a4):
@@ -760,3 +761,18 @@ def test_step_stats_say_what_set_the_substeps(a4):
     drop = thinburn.Simulation(drop_v, drop_f, material="cloth", cells=32)
     drop.set_colliders(spheres=[dict(centre=(0.0, 0.0, 0.2), radius=0.1)])
     assert any(by == "contact" and n > 1 for by, n in stats(drop, 24))
+
+
+def test_contact_rounds_keep_a_silk_pile_within_its_strain_limit():
+    # docs/dynamics.md §3.4, "Turns with self-contact": one 20 cm silk drop (the third of
+    # pile_ensemble.py's six). Self-contact once and last (contact_rounds=0, the build before)
+    # left its mesh edges 14.5 % short (p99); with the default turns 3.34 %.
+    from thinburn._mesh_measures import EdgeStrain
+    v, f = rect_sheet(0.2, 0.2, nx=41, ny=41, vertical=True, z=0.054)
+    p99 = {}
+    for rounds in (0, 3):
+        sim = thinburn.Simulation(v, f, material="silk", cells=128, floor=0.0, contact_rounds=rounds)
+        sim.run(4.0, dt=1 / 24)
+        p99[rounds] = np.percentile(EdgeStrain(v, f)(sim.vertex_positions()), 99)
+    assert p99[0] > 0.12
+    assert p99[3] < 0.04

@@ -304,12 +304,12 @@ def test_quick_burn_lights_a_lantern_on_its_side_and_floors_it_on_the_table(addo
 
 
 def test_a_pile_creasing_between_couples_does_not_warn_of_stretch(addon, tmp_path):
-    """A 40 cm cloth (61 x 61) let go upright on a table folds its core-chosen lattice of
+    """A 40 cm silk (61 x 61) let go upright on a table folds its core-chosen lattice of
     9 x 9 couples through up to 180 degrees between neighbours: the mesh's edges across those
-    creases are chords, up to 65 % short in these 96 frames, while the sheet under them keeps
-    its length. The bake measures edges whose chords strain past 1 % along the surface (up to
-    1042 in a frame), and the worst edge over all frames is then 5.6 % (bound 7 %; docs/lattice.md,
-    "Creases between couples"). The bake reports no stretch."""
+    creases are chords, up to 99.97 % short in these 96 frames, while the sheet under them
+    keeps its length. The bake measures edges whose chords strain past 1 % along the surface
+    (up to 3319 in a frame), and the worst edge over all frames is then 3.9 % (bound 5 %;
+    docs/lattice.md, "Creases between couples"). The bake reports no stretch."""
     from blender_helpers import link_mesh
     n = 61
     xs, zs = np.linspace(-0.2, 0.2, n), np.linspace(0.02, 0.42, n)
@@ -319,14 +319,14 @@ def test_a_pile_creasing_between_couples_does_not_warn_of_stretch(addon, tmp_pat
     sheet = link_mesh("Cloth", verts, faces)
     table = make_box_table(top=0.0, size=1.2)
     s = _shell(sheet, tmp_path, frames=96, cells=128, crumple=True, table=table)
-    s.material = "cloth"
+    s.material = "silk"
     make_igniter(sheet, (-0.2, 0.0, 0.02), lit_from=200, radius=RADIUS)  # lit after the bake: unburnt
     job = _bake_report(addon, sheet)
     assert job.shape["couples"] == 81
     frames = _baked_world(addon, sheet, tmp_path / "cache")
     chords = edge_strain(frames[0], frames, mesh_edges(sheet))
-    # Creases took edges past the warning's 50 % (measured 65 %): a chord meter would warn.
+    # Creases took edges past the warning's 50 %: a chord meter would warn.
     assert chords.max() > addon.stretch.WARN_STRAIN
     assert job.stretch.creased > 0
-    assert job.max_strain < 0.07
+    assert job.max_strain < 0.05
     assert not [w for w in job.warnings if "stretched" in w]
