@@ -308,7 +308,7 @@ FIRE_KEYS = ("cv", "v_floor", "speed_noise", "duration_noise", "climb", "wind_sp
              "ash_fraction", "ash_strength")
 BOOL_KEYS = {"heat_fast", "sleeping", "crumple_momentum", "bimetal", "anisotropic_curl", "self_collision"}
 INT_KEYS = {"substeps", "max_substeps", "cg_max_iterations", "ldlt_max_vertices", "refactor_iterations",
-            "wake_hold", "particle_capacity"}
+            "wake_hold", "particle_capacity", "contact_rounds"}
 CHOICE_KEYS = {"preconditioner"}
 VECTOR_KEYS = {"gravity"}
 ALL_KEYS = FIRE_KEYS + DYNAMICS_KEYS + BENDING_KEYS + tuple(PARTICLE_PREFIX + k for k in PARTICLE_KEYS)
