@@ -303,7 +303,7 @@ class BakeJob:
         meter = self.stretch
         self.worker = CoreWorker(lambda: thinburn.Simulation(world, tris, **kwargs), self.dt,
                                  self.want_particles, shell=self.shell,
-                                 stretch_edges=None if meter is None else (meter.edges, meter.rest))
+                                 stretch_edges=None if meter is None else (*meter.ends, meter.rest))
         self.worker.start()
 
     # --- setup -------------------------------------------------------------------------------
@@ -568,11 +568,8 @@ class BakeJob:
                 self._built(msg[1])
             elif kind == "frame":
                 _, index, positions, lit, particles, strains = msg
-                if self.stretch is not None:
-                    if strains is None:
-                        self.stretch.add(positions, self.frames[index])
-                    else:
-                        self.stretch.add_strains(*strains, self.frames[index])
+                if strains is not None:  # the worker measures when the bake has a meter
+                    self.stretch.add_strains(*strains, self.frames[index])
                 for sheet in self.sheets:
                     sheet.add(index, positions)
                 self.lit += lit

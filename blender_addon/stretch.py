@@ -18,6 +18,17 @@ WARN_STRAIN = 0.5  # |length / rest length - 1| above which the bake's report wa
 ALONG_FROM = 0.01
 
 
+def chord_strains(positions: np.ndarray, a: np.ndarray, b: np.ndarray, rest: np.ndarray) -> np.ndarray:
+    """|l / L - 1| per edge (a[i], b[i]) of rest length rest[i]: np.take and einsum, a third of
+    fancy indexing and norm's time on a 16k mesh's 48k edges (a probe)."""
+    d = np.take(positions, a, axis=0)
+    d -= np.take(positions, b, axis=0)
+    strain = np.sqrt(np.einsum("ij,ij->i", d, d))
+    strain /= rest
+    strain -= 1.0
+    return np.abs(strain, out=strain)
+
+
 class StretchMeter:
     """Per edge of the mesh, the largest |length / rest - 1| over the frames fed to it."""
 
@@ -28,6 +39,7 @@ class StretchMeter:
         keep = length > 1e-9  # a zero-length edge (merged vertices) has no strain
         self.edges = edges[keep]
         self.rest = length[keep]
+        self.ends = (np.ascontiguousarray(self.edges[:, 0]), np.ascontiguousarray(self.edges[:, 1]))
         self.worst = np.zeros(len(self.edges))
         self.worst_frame = np.zeros(len(self.edges))
         self.creased = 0  # the most edges in a frame measured along the surface, not as chords
@@ -35,8 +47,7 @@ class StretchMeter:
     def add(self, positions: np.ndarray, frame: float) -> None:
         """One frame's positions, every edge measured as a chord."""
         p = np.asarray(positions, dtype=np.float64)
-        e = self.edges
-        self.add_strains(np.abs(np.linalg.norm(p[e[:, 0]] - p[e[:, 1]], axis=1) / self.rest - 1.0), 0, frame)
+        self.add_strains(chord_strains(p, *self.ends, self.rest), 0, frame)
 
     def add_strains(self, strain: np.ndarray, creased: int, frame: float) -> None:
         """One frame's |l/L - 1| per edge, `creased` of them measured along the surface (the

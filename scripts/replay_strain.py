@@ -15,6 +15,14 @@ from thinburn import scenefile, wedge
 from thinburn._mesh_measures import EdgeStrain, SurfaceStrain
 
 
+def number(text):
+    """An int where the text is one, else a float (1e-3, 0.5)."""
+    try:
+        return int(text)
+    except ValueError:
+        return float(text)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("scene", help="a scene file (.npz or .json)")
@@ -25,7 +33,7 @@ def main():
     spec = scenefile.load_scene(a.scene)
     sim, _, fps, frames = wedge.simulation_for(spec, {})
     if a.dynamics:
-        sim.set_dynamics(**{k: float(v) if "." in v else int(v) for k, v in (kv.split("=") for kv in a.dynamics)})
+        sim.set_dynamics(**{k: number(v) for k, v in (kv.split("=", 1) for kv in a.dynamics)})
     v, f = np.asarray(spec.vertices), np.asarray(spec.faces)
     chord, surface = EdgeStrain(v, f), SurfaceStrain(v, f)
     e = chord.edges
