@@ -94,6 +94,8 @@ const std::vector<param::Field<DynamicsParams>>& DynamicsParams::fields() {
       field("strain_limit", &P::strain_limit, within(0, 1, false, true),
             "largest |l / L - 1| between neighbouring couples' centres (0: none)",
             "0 turns the limit off"),
+      field("k_limit", &P::k_limit, at_least(0),
+            "coefficient by which the membrane stiffens beyond 0.8 strain_limit (0: none)"),
       choice("integrator", &P::integrator, "Integrator", {"explicit", "symplectic", "implicit", "bdf2"},
              "the lattice's time integrator"),
       field("crumple_gain", &P::crumple_gain, "multiplies the increase of D turned into a crumple"),
@@ -260,6 +262,7 @@ void LatticeDynamics::refresh_membrane() {
     const double layer = kind_[t] == 0 ? layer_k(0) + 4.0 * layer_k(2) : layer_k(kind_[t]);
     k[e] = 2.0 * (1.0 - bend_share_) * layer * 0.5 * (spring_scale_[t] + spring_scale_[b]);
   }
+  membrane_->set_knee(kKneeShare * p_.strain_limit, p_.k_limit * p_.stiffness_unit);
 }
 
 double LatticeDynamics::layer_k(int kind) const {
@@ -302,7 +305,7 @@ void LatticeDynamics::set_params(const DynamicsParams& p) {
       o.wind_drag != p.wind_drag || o.has_floor != p.has_floor || o.floor_z != p.floor_z ||
       o.friction != p.friction || o.integrator != p.integrator || o.sleeping != p.sleeping ||
       o.sleep_speed != p.sleep_speed || o.bimetal != p.bimetal || o.flexural_rigidity != p.flexural_rigidity ||
-      o.strain_limit != p.strain_limit ||
+      o.strain_limit != p.strain_limit || o.k_limit != p.k_limit ||
       (p.bimetal && o.crumple_gain != p.crumple_gain);
   if (o.integrator != p.integrator) forget_history();
   if (p.bimetal && (!o.bimetal || o.crumple_gain != p.crumple_gain || o.anisotropic_curl != p.anisotropic_curl)) bimetal_all_ = true;

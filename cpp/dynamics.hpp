@@ -47,6 +47,10 @@ enum class Preconditioner {
 /// count runs every substep, max_substeps only caps what an explicit step may ask for.
 constexpr int kMaxFixedSubsteps = 10000;
 constexpr int kMaxSubstepsCeiling = 1000000;
+/// Where the membrane's knee lies, as a share of strain_limit: inside the limit, so that a
+/// sheet at rest rests on the knee's stiffness, not on the limit's projection (whose resting
+/// shape depends on the step; docs/dynamics.md §3.4, "The knee").
+constexpr double kKneeShare = 0.8;
 
 /// @brief Parameters of the lattice's motion; may change between steps.
 struct DynamicsParams {
@@ -74,6 +78,10 @@ struct DynamicsParams {
   /// Largest |l / L - 1| of the distance between neighbouring couples' centres, kept after each
   /// substep (strain_limit.hpp); 0: no limit, in [0, 1).
   double strain_limit = 0.0;
+  /// Coefficient (times stiffness_unit, N/m) by which a membrane spring stiffens beyond
+  /// kKneeShare * strain_limit: the yarns straighten (docs/dynamics.md §3.4, "The knee"). Only
+  /// where the sheet has a membrane (flexural_rigidity below the lattice's own); 0: none.
+  double k_limit = 1.0;
   Integrator integrator = Integrator::Implicit;
   double crumple_gain = 1.0;   ///< multiplies the increase of D turned into a crumple (set_material: kCrumpleReferenceK / k_structure)
   double plasticity = 1.0;     ///< in [0, 1]: share of each crumple that the springs' rest lengths keep

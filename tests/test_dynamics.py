@@ -22,7 +22,9 @@ def exact_omega(dyn, masses):
 
 # With flexural_rigidity below the lattice's own (0.045 N m here), membrane springs join the
 # layers (cpp/membrane.*, tests/test_membrane.py): the same derivatives hold.
-SOFT = [{}, dict(flexural_rigidity=2e-6)]
+# The third: the membrane's knee (docs/dynamics.md §3.4), beyond 0.8 * 5 % where perturbed()'s
+# 1 cm noise on 5 cm spacings stretches a pair of couples.
+SOFT = [{}, dict(flexural_rigidity=2e-6), dict(flexural_rigidity=2e-6, strain_limit=0.05, k_limit=2.0)]
 
 
 def perturbed(seed=0, M=3, **params):
@@ -57,6 +59,9 @@ def test_spring_forces_are_minus_the_energy_gradient(soft):
     stretch = lengths - np.asarray(dyn.rest_lengths)
     assert (stretch > 0).any() and (stretch < 0).any()  # both regimes are exercised
     assert set(np.unique(kinds)) == {0, 1, 2, 3, 4} - ({2} if lat.M < 3 else set()) | ({5} if soft else set())
+    if soft.get("k_limit"):  # pairs beyond the knee: 2.66 J against 2.40 J without it
+        _, kneeless, _ = perturbed(**{**soft, "k_limit": 0.0})
+        assert dyn.energy() > 1.05 * kneeless.energy()
 
 
 @pytest.mark.parametrize("soft", SOFT)
