@@ -74,7 +74,7 @@ def test_a_sheet_landing_on_its_edge_keeps_its_bottom_row(material, bound):
     assert worst < bound
 
 
-@pytest.mark.parametrize("material, median_bound", [("cloth", 0.025), ("silk", 0.035)])
+@pytest.mark.parametrize("material, median_bound", [("cloth", 0.025), ("silk", 0.022)])
 def test_a_fabric_collapsing_into_a_pile_keeps_its_edge_lengths(material, median_bound):
     """A 20 cm fabric dropped upright (cells 128: 9 x 9 couples) collapses into a pile 1-3 cm
     high, its lattice folded through up to 107 degrees between couples. Where the lattice
@@ -84,8 +84,9 @@ def test_a_fabric_collapsing_into_a_pile_keeps_its_edge_lengths(material, median
     `python scripts/pile_ensemble.py --sizes 0.2`). Since the strain limit and self-contact
     take turns while layers touch (docs/dynamics.md §3.4): cloth 0.65-2.98 %, median 2.13 %
     (0.66 % before, but one drop 4.77 %: its bottom row now sits at the 3 % limit in three
-    drops), silk 2.27-4.91 %, median 3.17 % (7.53 % before, drops up to 14.8 %). Issue #12
-    asks 5 % of fabrics: every drop must stay under 5.5 %."""
+    drops), silk 2.27-4.91 %, median 3.17 % (7.53 % before, drops up to 14.8 %); since the
+    membrane's knee (§3.4, "The knee") silk 0.42-2.91 %, median 1.86 %. Issue #12 asks 5 % of
+    fabrics: every drop must stay under 5.5 %."""
     from thinburn._mesh_measures import EdgeStrain
     strains = []
     for k in range(6):
@@ -610,8 +611,8 @@ def test_a_large_fabric_pile_keeps_its_surface_and_creases_between_couples(mater
     across a crease is a chord, shorter than the surface under it (a 108 degree crease takes
     41 % off an edge straddling it evenly), so the mesh's edges end up to 24 % short for cloth
     and 98-99 % for silk (p99, six drops), while the surface keeps its length: p99 of each
-    edge's length along it (SurfaceStrain, 16 pieces) measured 0.69-1.42 %, median 0.70 %
-    (cloth) and 0.78 % (silk; `python scripts/pile_ensemble.py --sizes 0.4`; docs/lattice.md,
+    edge's length along it (SurfaceStrain, 16 pieces) measured 0.69-0.79 %, median 0.70 %
+    (cloth) and 0.36-2.47 %, median 0.74 % (silk; `python scripts/pile_ensemble.py --sizes 0.4`; docs/lattice.md,
     "Creases between couples"). Bounds: median 1 %, every drop 5 %; and every edge that is
     more than 1 % shorter than its surface crosses a couple line or ends on the floor, where
     the mesh is clamped."""
