@@ -139,7 +139,9 @@ class Simulation:
           ``flexural_rigidity`` (N m, default the material's: the sheet bends with it, not with
           the lattice's own layers, docs/dynamics.md §1.1), ``strain_limit`` (default the
           material's: the largest stretch or squash of the intact sheet's mid-surface between
-          neighbouring couples, 0 = none, docs/dynamics.md §3.4), ``buoyancy``,
+          neighbouring couples, 0 = none, docs/dynamics.md §3.4), ``k_limit`` (1: beyond
+          0.8 of strain_limit the membrane stiffens by k_limit * stiffness_unit N/m, so that
+          a hanging fabric rests where it would at any step; 0 = none, §3.4 "The knee"), ``buoyancy``,
           ``wind_drag``, ``friction``, ``crumple_gain``, ``plasticity``, ``crumple_momentum``,
           ``bimetal`` (default True: D shrinks the heated face's springs, docs/dynamics.md §2;
           False: the paper's prescribed chord motion), ``sleep_speed``,
