@@ -82,15 +82,17 @@ def stretch_warning(name: str, strain: float, frame, lattice: int, crumple=None,
     motion = "0: the core's choice" if lattice == 0 else f"{lattice}"
     text = (f"'{name}' stretched: an edge reached {1.0 + strain:.1f}× its rest length at frame "
             f"{frame:.0f} (a sheet hardly stretches), so the motion misbehaved there. ")
+    # Motion Detail counts couples along the square root of the area: twice as many per side as
+    # the core chose (or as set) halves their spacing. A fixed suggestion ("such as 9") named
+    # the lattice the core had already chosen for a 48-cell sheet, which changed nothing.
+    per_side = lattice if lattice > 0 else (couples or 0) ** 0.5
+    finer = f", e.g. {max(9, int(round(2 * per_side)))}" if per_side > 0 else ""
     if fit is not None and fit > 1.0:
-        # Motion Detail counts couples along the square root of the area: twice as many per
-        # side as the core chose (or as set) halves their spacing.
-        per_side = lattice if lattice > 0 else (couples or 0) ** 0.5
-        finer = f", e.g. {max(9, int(round(2 * per_side)))}" if per_side > 0 else ""
         text += (f"Its mesh has detail finer than the motion lattice (pleats, waves, folds up to "
                  f"{fit:.1f} half layer-thicknesses off it): set Motion Detail (now {motion}) higher{finer}")
     else:
-        text += f"Set Motion Detail (now {motion}) to another value such as 9"
+        text += (f"A lattice too coarse for the shape it takes (an edge of a collider, a tight fold) "
+                 f"is the usual cause: set Motion Detail (now {motion}) higher{finer}")
     if crumple is None or crumple > 0.3:
         text += ", lower Crumple Amount (ThinBurn > Motion; e.g. 0.3)"
     return text + ", or switch Crumple off to burn the sheet in its rest shape"

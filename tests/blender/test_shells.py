@@ -251,6 +251,11 @@ def test_stretch_meter_and_its_warning(addon):
     text = addon.stretch.stretch_warning("Letter", 2.0, 9.0, 0)
     assert "3.0× its rest length at frame 9" in text and "Motion Detail" in text
     assert "lower Crumple Amount" in text
+    # It names a finer lattice than the one baked: twice the couples per side the core chose
+    # (an artist's trial was told "such as 9" of a sheet whose lattice was already 9).
+    text = addon.stretch.stretch_warning("Cloth", 0.9, 94.0, 0, couples=81)
+    assert "Motion Detail (now 0: the core's choice) higher, e.g. 18" in text
+    assert "higher, e.g. 24" in addon.stretch.stretch_warning("Cloth", 0.9, 94.0, 12)
     assert addon.stretch.stretch_warning("Letter", 0.2, 5.0, 0) is None
     # The bake's worker sends each frame's strains, some measured along the surface.
     meter.add_strains(np.array([0.01, 0.02]), 1, 12)
