@@ -1,0 +1,59 @@
+"""A 60 x 60 cm silk (61 x 61 vertices) hanging from its two top corners, 5 s at 1/24 s, no fire
+(an artist's trial; docs/dynamics.md §3.4, "Sweeps"): per lattice, the largest strain of the
+couples' sides after each of the first three frames, of the mesh's edges after them and over
+seconds 1 to 5, the mesh's largest move in a frame over the last second, and the seconds taken.
+
+    python scripts/pinned_silk.py [--lattices 16 32] [--k-limit 1]
+"""
+import argparse
+import time
+
+import numpy as np
+
+import thinburn
+from thinburn._mesh_measures import EdgeStrain
+from thinburn.scenes import rect_sheet
+
+
+def side_strain(sim, m):
+    c = sim.lattice_positions().reshape(m, m, 2, 3).mean(2)
+    r = sim.lattice_rest_positions().reshape(m, m, 2, 3).mean(2)
+    sx = np.linalg.norm(c[:, 1:] - c[:, :-1], axis=-1) / np.linalg.norm(r[:, 1:] - r[:, :-1], axis=-1) - 1
+    sy = np.linalg.norm(c[1:] - c[:-1], axis=-1) / np.linalg.norm(r[1:] - r[:-1], axis=-1) - 1
+    return max(np.abs(sx).max(), np.abs(sy).max())
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--lattices", type=int, nargs="+", default=[16, 32])
+    ap.add_argument("--k-limit", type=float, default=None, help="the knee's coefficient (default the core's)")
+    a = ap.parse_args()
+    v, f = rect_sheet(0.6, 0.6, nx=61, ny=61, vertical=True, z=0.5)
+    top = np.flatnonzero(np.isclose(v[:, 2], v[:, 2].max()))
+    pins = [top[np.argmin(v[top, 0])], top[np.argmax(v[top, 0])]]
+    strain = EdgeStrain(v, f)
+    for m in a.lattices:
+        kw = {} if a.k_limit is None else dict(k_limit=a.k_limit)
+        sim = thinburn.Simulation(v, f, material="silk", cells=48, pinned=pins, lattice=m, **kw)
+        t0 = time.perf_counter()
+        sides, mesh, later, moves = [], [], 0.0, []
+        prev = sim.vertex_positions()
+        for frame in range(1, 121):
+            sim.step(1 / 24)
+            x = sim.vertex_positions()
+            if frame <= 3:
+                sides.append(side_strain(sim, m))
+                mesh.append(strain(x).max())
+            if frame > 24:
+                later = max(later, strain(x).max())
+            if frame > 96:
+                moves.append(np.linalg.norm(x - prev, axis=1).max())
+            prev = x
+        print(f"lattice {m}: couples' sides {', '.join(f'{100 * s:.2f}' for s in sides)} % and mesh edges "
+              f"{', '.join(f'{100 * s:.2f}' for s in mesh)} % after frames 1-3; mesh edges at most "
+              f"{100 * later:.2f} % over seconds 1-5; largest move in a frame over the last second "
+              f"{1e3 * max(moves):.3f} mm; {time.perf_counter() - t0:.1f} s", flush=True)
+
+
+if __name__ == "__main__":
+    main()
