@@ -256,13 +256,17 @@ void LatticeDynamics::refresh_membrane() {
   // membrane part joins the structure springs': under a uniform stretch a flex spring two
   // spacings long stores what a structure spring of 4 k_flex does (exact on a grid's interior).
   if (!membrane_) return;
+  // The knee (the yarns, straight) follows the strength as the rest does: ash holds little.
   std::vector<double>& k = membrane_->stiffness();
+  std::vector<double>& knee = membrane_->knee_stiffness();
   for (int e = 0; e < membrane_->size(); ++e) {
     const int t = membrane_->top(e), b = membrane_->bottom(e);
     const double layer = kind_[t] == 0 ? layer_k(0) + 4.0 * layer_k(2) : layer_k(kind_[t]);
-    k[e] = 2.0 * (1.0 - bend_share_) * layer * 0.5 * (spring_scale_[t] + spring_scale_[b]);
+    const double scale = 0.5 * (spring_scale_[t] + spring_scale_[b]);
+    k[e] = 2.0 * (1.0 - bend_share_) * layer * scale;
+    knee[e] = p_.k_limit * p_.stiffness_unit * scale;
   }
-  membrane_->set_knee(kKneeShare * p_.strain_limit, p_.k_limit * p_.stiffness_unit);
+  membrane_->set_knee(kKneeShare * p_.strain_limit);
 }
 
 double LatticeDynamics::layer_k(int kind) const {

@@ -121,11 +121,12 @@ void Membrane::link(const std::vector<int>& sa, const std::vector<int>& sb, cons
   for (int e = 0; e < ne; ++e) base_[e] = (couple_centre(rest, cb_[e]) - couple_centre(rest, ca_[e])).norm();
   rest_ = base_;
   k_.assign(ne, 0.0);
+  k_knee_.assign(ne, 0.0);
   jac_.assign(ne, Eigen::Matrix3d::Zero());
 }
 
 double Membrane::beyond_knee(int e, double l, double* end) const {
-  if (k_knee_ <= 0.0) return 0.0;
+  if (knee_ <= 0.0 || !(k_knee_[e] > 0.0)) return 0.0;
   const double end_ = (1.0 + knee_) * base_[e];
   if (l <= end_) return 0.0;
   if (end) *end = end_;
@@ -140,7 +141,7 @@ Eigen::Vector3d Membrane::force(int v, const RowMatX3& x) const {
     const int e = couple_elem_[q];
     const Eigen::Vector3d d = couple_centre(x, ca_[e] == c ? cb_[e] : ca_[e]) - me;
     const double l = d.norm();
-    if (l > 1e-300) f += 0.5 * (k_[e] * (l - rest_[e]) + k_knee_ * beyond_knee(e, l)) / l * d;
+    if (l > 1e-300) f += 0.5 * (k_[e] * (l - rest_[e]) + k_knee_[e] * beyond_knee(e, l)) / l * d;
   }
   return f;
 }
@@ -150,7 +151,7 @@ double Membrane::energy(const RowMatX3& x) const {
   for (int e = 0; e < size(); ++e) {
     const double l = (couple_centre(x, cb_[e]) - couple_centre(x, ca_[e])).norm();
     const double dl = l - rest_[e], over = beyond_knee(e, l);
-    w += 0.5 * k_[e] * dl * dl + 0.5 * k_knee_ * over * over;
+    w += 0.5 * k_[e] * dl * dl + 0.5 * k_knee_[e] * over * over;
   }
   return w;
 }
@@ -174,7 +175,7 @@ void Membrane::blocks(const RowMatX3& x, const std::vector<int>& slot, bool clam
     const Eigen::Vector3d d = couple_centre(x, b) - couple_centre(x, a);
     jac_[e] = spring_block(d, k_[e], rest_[e], clamp);
     double end = 0.0;
-    if (beyond_knee(e, d.norm(), &end) != 0.0) jac_[e] += spring_block(d, k_knee_, end, clamp);
+    if (beyond_knee(e, d.norm(), &end) != 0.0) jac_[e] += spring_block(d, k_knee_[e], end, clamp);
   });
 }
 
@@ -193,7 +194,7 @@ double Membrane::row_bound(int v, const RowMatX3& x, const Eigen::VectorXd& mass
     const int o = ca_[e] == c ? cb_[e] : ca_[e];
     const double l = (couple_centre(x, o) - couple_centre(x, c)).norm();
     const double g = l > 1e-300 ? std::abs(1.0 - rest_[e] / l) : 1.0;
-    const double knee = beyond_knee(e, l) != 0.0 ? k_knee_ : 0.0;  // |1 - end / l| < 1 while l > end / 2
+    const double knee = beyond_knee(e, l) != 0.0 ? k_knee_[e] : 0.0;  // |1 - end / l| < 1 while l > end / 2
     const double w = 0.25 * (k_[e] + knee) * std::max(1.0, g) / std::sqrt(mass(v));
     b += w * (1.0 / std::sqrt(mass(v)) + 1.0 / std::sqrt(mass(v ^ 1)) + 1.0 / std::sqrt(mass(2 * o)) +
               1.0 / std::sqrt(mass(2 * o + 1)));

