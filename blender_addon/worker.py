@@ -114,7 +114,6 @@ class CoreWorker(threading.Thread):
         self._colliders = None  # thinburn.colliders.Colliders built from the first task that has some
         self._collider_meshes = []  # per collider: the (vertices, faces) its field was built from
         self._stretch_edges = stretch_edges  # (first ends, second ends, rest lengths)
-        self._along = True  # measure along the surface (off with a core that cannot)
 
     def cancel(self) -> None:
         self._cancel.set()
@@ -181,13 +180,10 @@ class CoreWorker(threading.Thread):
         e0, e1, rest = self._stretch_edges
         strain = chord_strains(positions, e0, e1, rest)
         over = np.flatnonzero(strain > ALONG_FROM)
-        if not over.size or not self._along:
+        if not over.size:
             return strain, 0
-        try:
-            along = sim.surface_lengths(np.stack([e0[over], e1[over]], axis=1))
-        except (AttributeError, ValueError):  # a core without surface_lengths
-            self._along = False
-            return strain, 0
+        # The add-on ships its own core, which has surface_lengths on every lattice.
+        along = sim.surface_lengths(np.stack([e0[over], e1[over]], axis=1))
         strain[over] = np.abs(along / rest[over] - 1.0)
         return strain, len(over)
 

@@ -70,7 +70,6 @@ class Membrane {
   /// base()), membrane spring e stiffens by knee_stiffness()[e] N/m, as a woven fabric does
   /// once its yarns are straight (docs/dynamics.md §3.4, "The knee"). knee <= 0: none.
   void set_knee(double knee) { knee_ = knee; }
-  double knee() const { return knee_; }
   /// @brief Per membrane spring, N/m (the caller's k_limit and strength; 0: none).
   std::vector<double>& knee_stiffness() { return k_knee_; }
 
@@ -89,11 +88,11 @@ class Membrane {
   double row_bound(int v, const RowMatX3& x, const Eigen::VectorXd& mass) const;
 
  private:
-  std::vector<int> ca_, cb_, top_, bot_;
-  std::vector<std::uint8_t> carried_;
   /// Length of e beyond its knee (0 within it), and the knee's end it passed.
   double beyond_knee(int e, double l, double* end = nullptr) const;
 
+  std::vector<int> ca_, cb_, top_, bot_;
+  std::vector<std::uint8_t> carried_;
   std::vector<double> k_, rest_, base_;
   double knee_ = 0.0;
   std::vector<double> k_knee_;

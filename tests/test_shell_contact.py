@@ -127,7 +127,7 @@ def test_cloth_draped_on_a_ball_stays_on_it(friction, bound):
     # symmetric sweeps, 0.04 before the membrane's knee); friction 0.5: 0.09 mm/s (23.4, 1.06).
     # What is left is the hanging sides' swing, which the knee's stiffer stretch carries to the
     # top: it moves 2.8 mm between seconds 4 and 6 and 0.9 mm in the next six
-    # (docs/dynamics.md §3.2).
+    # (scripts/collider_friction.py --track; docs/dynamics.md §3.2).
     sim = thinburn.Simulation(*rect_sheet(1.0, 1.0, nx=49, ny=49, z=0.32), cells=32, lattice=12,
                               material="cloth", **QUIET)
     sim.set_colliders(spheres=[dict(centre=(0.5, 0.5, 0.0), radius=0.3, friction=friction)])
