@@ -48,13 +48,18 @@ def cone_slide(theta_deg, friction=0.5, samples=4, **kw):
     return abs(angle() - a) * radius * 1e3 / 3.0
 
 
-def drape_creep(friction=0.5, **kw):
-    """mm/s of the mean of the vertices resting on the sphere's top, seconds 4 to 8."""
+def draped(friction, **kw):
+    """The 1 m cloth 2 cm over the 0.3 m sphere, and which of its vertices rest on its top."""
     sim = thinburn.Simulation(*rect_sheet(1.0, 1.0, nx=49, ny=49, z=0.32), cells=32, lattice=12,
                               material="cloth", **QUIET, **kw)
     sim.set_colliders(spheres=[dict(centre=(0.5, 0.5, 0.0), radius=0.3, friction=friction)])
     x0 = sim.vertex_positions()
-    top = np.hypot(x0[:, 0] - 0.5, x0[:, 1] - 0.5) < 0.15
+    return sim, np.hypot(x0[:, 0] - 0.5, x0[:, 1] - 0.5) < 0.15
+
+
+def drape_creep(friction=0.5, **kw):
+    """mm/s of the mean of the vertices resting on the sphere's top, seconds 4 to 8."""
+    sim, top = draped(friction, **kw)
     for _ in range(96):
         sim.step(1 / 24)
     a = sim.vertex_positions()[top].mean(0)
@@ -65,11 +70,7 @@ def drape_creep(friction=0.5, **kw):
 
 def drape_track(friction=2.0, **kw):
     """The drape's top: how far (mm) its mean moved from second 4 to seconds 6, 8, 10, 12."""
-    sim = thinburn.Simulation(*rect_sheet(1.0, 1.0, nx=49, ny=49, z=0.32), cells=32, lattice=12,
-                              material="cloth", **QUIET, **kw)
-    sim.set_colliders(spheres=[dict(centre=(0.5, 0.5, 0.0), radius=0.3, friction=friction)])
-    x0 = sim.vertex_positions()
-    top = np.hypot(x0[:, 0] - 0.5, x0[:, 1] - 0.5) < 0.15
+    sim, top = draped(friction, **kw)
     sim.run(4.0, dt=1 / 24)
     a = sim.vertex_positions()[top].mean(0)
     out = []
