@@ -1,8 +1,9 @@
 """Replay a scene file (thinburn.scenefile, as the add-on exports it) in the core and print
 how its unburnt mesh stretches: every `--every` frames the p99 of |l/L - 1| over edges whose
 two vertices are unburnt, as chords (the mesh) and along the surface (SurfaceStrain), the worst
-edge along the surface, the lowest couple centre (mm) and the burning cells. The Blender pile's
-strain reproduced outside Blender (docs/blender.md, "pile"):
+edge along the surface, the lowest couple centre (mm) and the burning cells; at the end the
+seconds per phase and the steps' substeps and stretch redos. The Blender pile's strain and cost
+reproduced outside Blender (docs/blender.md, "pile"; docs/dynamics.md §9):
 
     python scripts/render_drape.py --scenes pile --frames 120 --render --export-scene /tmp/scenes
     python scripts/replay_strain.py /tmp/scenes/pile.npz [--dynamics contact_rounds=0]
@@ -39,7 +40,14 @@ def main():
     e = chord.edges
     print(f"{a.scene}: {frames} frames at {fps:g} fps, lattice {sim.lattice_size}, {sim.lattice_couples} couples")
 
+    work = {"substeps": 0, "stretch_redos": 0, "redone frames": 0}
+
     def measure(k, s):
+        if k:  # the step before this frame's record
+            st = s.step_stats()
+            work["substeps"] += st["substeps"]
+            work["stretch_redos"] += st["stretch_redos"]
+            work["redone frames"] += st["stretch_redos"] > 0
         if k % a.every:
             return
         char = s.vertex_char()
@@ -52,6 +60,7 @@ def main():
 
     wedge.run_frames(sim, spec, fps, frames, measure)
     print("seconds per phase:", {k: round(v, 2) for k, v in sim.phase_seconds().items()})
+    print("steps' work (substeps of each step's last pass; stretch redos, docs/dynamics.md §4):", work)
 
 
 if __name__ == "__main__":
