@@ -245,6 +245,7 @@ void LatticeDynamics::add_membrane() {
   }
   bimetal_.add_springs();
   membrane_->link(sa_, sb_, r, C_);
+  membrane_->add_corners(topo_.grid_side);
   build_incidence();  // the solver's pattern gained blocks
   refresh_spring_scale();
   sleep_.wake_all();

@@ -270,6 +270,8 @@ class LatticeDynamics {
   double bending_share() const { return bend_share_; }
   /// @brief Membrane springs between couples' centres (empty while bending_share() is 1).
   int membrane_springs() const { return membrane_ ? membrane_->size() : 0; }
+  /// @brief Lattice corners whose diagonal has a knee (Membrane::add_corners): 4 on a grid.
+  int membrane_corners() const { return membrane_ ? membrane_->corners() : 0; }
 
  private:
   void build_springs();

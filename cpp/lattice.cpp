@@ -435,6 +435,16 @@ std::vector<Eigen::Matrix3d> shape_operators(const RowMatX3& rest, const Lattice
   return out;
 }
 
+std::vector<std::array<int, 3>> grid_corners(int M) {
+  std::vector<std::array<int, 3>> out;
+  if (M < 2) return out;
+  for (const auto& [i, j] : {std::pair{0, 0}, {0, M - 1}, {M - 1, 0}, {M - 1, M - 1}}) {
+    const int di = i == 0 ? 1 : -1, dj = j == 0 ? 1 : -1;
+    out.push_back({i * M + j, (i + di) * M + j, i * M + j + dj});
+  }
+  return out;
+}
+
 LatticeTopology grid_topology(int M) {
   if (M < 2) throw std::invalid_argument("M must be >= 2, got " + std::to_string(M));
   LatticeTopology t;

@@ -8,6 +8,7 @@
 /// reproduced exactly at rest whatever shape the lattice was draped into.
 #include <Eigen/Core>
 
+#include <array>
 #include <cstdint>
 #include <limits>
 #include <mutex>
@@ -129,6 +130,10 @@ constexpr long kRowCost = 32;
 /// then per couple its thickness spring and the transverse pairs to its +j and +i neighbours;
 /// neighbours in the order (i-1, j), (i+1, j), (i, j-1), (i, j+1).
 LatticeTopology grid_topology(int M);
+
+/// @brief The four corners of an M x M grid lattice (none for M < 2), couple i M + j: each as
+/// (the corner couple, its neighbour along i, its neighbour along j).
+std::vector<std::array<int, 3>> grid_corners(int M);
 
 /// @brief An M x M lattice of couples: rest and current positions of its 2 M^2 control vertices.
 class FfdLattice {

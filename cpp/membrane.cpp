@@ -125,6 +125,40 @@ void Membrane::link(const std::vector<int>& sa, const std::vector<int>& sb, cons
   jac_.assign(ne, Eigen::Matrix3d::Zero());
 }
 
+void Membrane::add_corners(int M) {
+  corner_.clear();
+  if (M < 2) return;
+  std::unordered_map<std::uint64_t, int> pair;
+  for (int e = 0; e < size(); ++e) pair.emplace(key(ca_[e], cb_[e]), e);
+  auto spring = [&](int p, int q) {
+    const auto it = pair.find(key(p, q));
+    return it == pair.end() ? -1 : it->second;
+  };
+  for (const auto& [a, b, c] : grid_corners(M)) {
+    Corner k{a, b, c, -1, -1, -1, 0.0};
+    k.ab = spring(k.a, k.b), k.ac = spring(k.a, k.c), k.bc = spring(k.b, k.c);
+    if (k.ab < 0 || k.ac < 0 || k.bc < 0) continue;  // not a grid's membrane
+    // The rest diagonal from the pairs' rest lengths is not enough (it needs the angle): from
+    // the membrane's base lengths by the parallelogram law, |b + c - 2a|^2 = 2|ab|^2 + 2|ac|^2 - |bc|^2.
+    const double q = 2.0 * base_[k.ab] * base_[k.ab] + 2.0 * base_[k.ac] * base_[k.ac] - base_[k.bc] * base_[k.bc];
+    if (!(q > 0.0)) continue;
+    k.base = std::sqrt(q);
+    corner_.push_back(k);
+  }
+}
+
+Eigen::Vector3d Membrane::corner_diagonal(const Corner& k, const RowMatX3& x) const {
+  return couple_centre(x, k.b) + couple_centre(x, k.c) - 2.0 * couple_centre(x, k.a);
+}
+
+double Membrane::corner_beyond(const Corner& k, double l, double* end) const {
+  if (knee_ <= 0.0 || !(corner_k(k) > 0.0)) return 0.0;
+  const double end_ = (1.0 + knee_) * k.base;
+  if (l <= end_) return 0.0;
+  if (end) *end = end_;
+  return l - end_;
+}
+
 double Membrane::beyond_knee(int e, double l, double* end) const {
   if (knee_ <= 0.0 || !(k_knee_[e] > 0.0)) return 0.0;
   const double end_ = (1.0 + knee_) * base_[e];
@@ -143,6 +177,16 @@ Eigen::Vector3d Membrane::force(int v, const RowMatX3& x) const {
     const double l = d.norm();
     if (l > 1e-300) f += 0.5 * (k_[e] * (l - rest_[e]) + k_knee_[e] * beyond_knee(e, l)) / l * d;
   }
+  for (const Corner& k : corner_) {
+    const int at[3] = {k.a, k.b, k.c};
+    for (int i = 0; i < 3; ++i) {
+      if (at[i] != c) continue;
+      const Eigen::Vector3d g = corner_diagonal(k, x);
+      const double l = g.norm(), over = corner_beyond(k, l);
+      // E = k/2 over^2; dE/dc_i = coef_i k over g/l; a vertex carries half its centre's force.
+      if (over > 0.0) f -= 0.5 * kCornerCoef[i] * corner_k(k) * over / l * g;
+    }
+  }
   return f;
 }
 
@@ -152,6 +196,10 @@ double Membrane::energy(const RowMatX3& x) const {
     const double l = (couple_centre(x, cb_[e]) - couple_centre(x, ca_[e])).norm();
     const double dl = l - rest_[e], over = beyond_knee(e, l);
     w += 0.5 * k_[e] * dl * dl + 0.5 * k_knee_[e] * over * over;
+  }
+  for (const Corner& k : corner_) {
+    const double over = corner_beyond(k, corner_diagonal(k, x).norm());
+    w += 0.5 * corner_k(k) * over * over;
   }
   return w;
 }
@@ -177,6 +225,22 @@ void Membrane::blocks(const RowMatX3& x, const std::vector<int>& slot, bool clam
     double end = 0.0;
     if (beyond_knee(e, d.norm(), &end) != 0.0) jac_[e] += spring_block(d, k_knee_[e], end, clamp);
   });
+  for (const Corner& k : corner_) {
+    // Hessian of k/2 over^2 in the centres: coef coef^T (x) H, H the spring block of g. As
+    // pair blocks (+X on i-i and j-j, -X on i-j): X = 2H on a-b and a-c, -H on b-c.
+    const auto fresh = [&](int e) {
+      const int a = ca_[e], b = cb_[e];
+      return slot.empty() || slot[2 * a] >= 0 || slot[2 * a + 1] >= 0 || slot[2 * b] >= 0 || slot[2 * b + 1] >= 0;
+    };
+    if (!fresh(k.ab) || !fresh(k.ac) || !fresh(k.bc)) continue;  // blocks left from an earlier call
+    const Eigen::Vector3d g = corner_diagonal(k, x);
+    double end = 0.0;
+    if (corner_beyond(k, g.norm(), &end) == 0.0) continue;
+    const Eigen::Matrix3d H = spring_block(g, corner_k(k), end, clamp);
+    jac_[k.ab] += 2.0 * H;
+    jac_[k.ac] += 2.0 * H;
+    jac_[k.bc] -= H;
+  }
 }
 
 Eigen::Matrix3d Membrane::share(int s) const {
@@ -198,6 +262,20 @@ double Membrane::row_bound(int v, const RowMatX3& x, const Eigen::VectorXd& mass
     const double w = 0.25 * (k_[e] + knee) * std::max(1.0, g) / std::sqrt(mass(v));
     b += w * (1.0 / std::sqrt(mass(v)) + 1.0 / std::sqrt(mass(v ^ 1)) + 1.0 / std::sqrt(mass(2 * o)) +
               1.0 / std::sqrt(mass(2 * o + 1)));
+  }
+  for (const Corner& k : corner_) {
+    const int at[3] = {k.a, k.b, k.c};
+    for (int i = 0; i < 3; ++i) {
+      if (at[i] != c) continue;
+      const Eigen::Vector3d g = corner_diagonal(k, x);
+      double end = 0.0;
+      if (corner_beyond(k, g.norm(), &end) == 0.0) continue;
+      // Vertex blocks coef_i coef_j H / 4, |H| <= k max(1, |1 - end / l|).
+      const double h = corner_k(k) * std::max(1.0, std::abs(1.0 - end / g.norm()));
+      for (int j = 0; j < 3; ++j)
+        b += 0.25 * std::abs(kCornerCoef[i] * kCornerCoef[j]) * h / std::sqrt(mass(v)) *
+             (1.0 / std::sqrt(mass(2 * at[j])) + 1.0 / std::sqrt(mass(2 * at[j] + 1)));
+    }
   }
   return b;
 }

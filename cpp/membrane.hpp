@@ -72,6 +72,16 @@ class Membrane {
   void set_knee(double knee) { knee_ = knee; }
   /// @brief Per membrane spring, N/m (the caller's k_limit and strength; 0: none).
   std::vector<double>& knee_stiffness() { return k_knee_; }
+  /// @brief The knee at the corners of an M x M grid lattice (couple i M + j; none for M < 2):
+  /// the sheet's diagonal there, g = c_b + c_c - 2 c_a (corner couple a, its neighbours b and
+  /// c), stiffens as a membrane spring does beyond (1 + knee) of its rest length, by the mean
+  /// knee stiffness of the pairs a-b and a-c. Near a lattice corner the mesh is the corner
+  /// cell's bilinear map, whose tangent along the diagonal is g: with the cell's sides long
+  /// and its cross diagonal short, each within the strain limit, g was 7.9 % long at a pinned
+  /// corner and the mesh's diagonal edges there 6.6 % (docs/dynamics.md §3.4, "Corners").
+  /// Call after link().
+  void add_corners(int M);
+  int corners() const { return static_cast<int>(corner_.size()); }
 
   /// @brief Force on control vertex v (half its couple's centre force), N.
   Eigen::Vector3d force(int v, const RowMatX3& x) const;
@@ -91,6 +101,19 @@ class Membrane {
   /// Length of e beyond its knee (0 within it), and the knee's end it passed.
   double beyond_knee(int e, double l, double* end = nullptr) const;
 
+  struct Corner {
+    int a, b, c;          // corner couple, its two grid neighbours
+    int ab, ac, bc;       // the membrane springs between them
+    double base;          // |g| on the rest lattice
+  };
+  /// The corner's diagonal g, its stiffness beyond the knee (N/m) and its length beyond the
+  /// knee's end (0 within it; end: that end).
+  Eigen::Vector3d corner_diagonal(const Corner& k, const RowMatX3& x) const;
+  double corner_k(const Corner& k) const { return 0.5 * (k_knee_[k.ab] + k_knee_[k.ac]); }
+  double corner_beyond(const Corner& k, double l, double* end = nullptr) const;
+  /// Its centre-level coefficients: g = sum coef_i c_i over (a, b, c).
+  static constexpr double kCornerCoef[3] = {-2.0, 1.0, 1.0};
+
   std::vector<int> ca_, cb_, top_, bot_;
   std::vector<std::uint8_t> carried_;
   std::vector<double> k_, rest_, base_;
@@ -101,6 +124,7 @@ class Membrane {
   std::vector<double> share_w_;
   std::vector<int> couple_start_, couple_elem_;  // per couple: its membrane springs
   std::vector<Eigen::Matrix3d> jac_;  // per membrane spring: its block (blocks())
+  std::vector<Corner> corner_;
 };
 
 }  // namespace thinburn

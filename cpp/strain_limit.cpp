@@ -21,6 +21,39 @@ StrainLimit::StrainLimit(const LatticeTopology& topology, const RowMatX3& rest) 
     cb_.push_back(b / 2);
     rest_.push_back((centre(rest, a / 2) - centre(rest, b / 2)).norm());
   }
+  for (const auto& [a, b, c] : grid_corners(topology.grid_side)) {
+    Corner k{a, b, c, 0.0};
+    k.rest = (centre(rest, k.b) + centre(rest, k.c) - 2.0 * centre(rest, k.a)).norm();
+    if (k.rest > 0.0) corner_.push_back(k);
+  }
+}
+
+int StrainLimit::limit_corner(const Corner& k, double limit, RowMatX3& x, RowMatX3& v, const Eigen::VectorXd& mass,
+                              const std::vector<int>& slot) const {
+  auto moves = [&](int c) { return slot[2 * c] >= 0 && slot[2 * c + 1] >= 0; };
+  if (!moves(k.a) && !moves(k.b) && !moves(k.c)) return 0;
+  const Eigen::Vector3d g = centre(x, k.b) + centre(x, k.c) - 2.0 * centre(x, k.a);
+  const double l = g.norm();
+  if (std::abs(l / k.rest - 1.0) <= limit || !(l > 0.0)) return 0;
+  const double inside = (1.0 - kInside) * limit;
+  const double target = std::clamp(l, (1.0 - inside) * k.rest, (1.0 + inside) * k.rest);
+  auto inv = [&](int c) { return moves(c) ? 1.0 / (mass[2 * c] + mass[2 * c + 1]) : 0.0; };
+  // |g| has gradient n at b and c and -2 n at a: the mass-weighted step along it.
+  const double wa = inv(k.a), wb = inv(k.b), wc = inv(k.c), den = 4.0 * wa + wb + wc;
+  const Eigen::RowVector3d n = (g / l).transpose();
+  const double fix = (l - target) / den;
+  const double rel = (0.5 * (v.row(2 * k.b) + v.row(2 * k.b + 1) + v.row(2 * k.c) + v.row(2 * k.c + 1)) -
+                      (v.row(2 * k.a) + v.row(2 * k.a + 1))).dot(n);
+  const double away = (l > target ? std::max(rel, 0.0) : std::min(rel, 0.0)) / den;
+  for (int s = 0; s < 2; ++s) {
+    x.row(2 * k.a + s) += (2.0 * wa * fix) * n;
+    x.row(2 * k.b + s) -= (wb * fix) * n;
+    x.row(2 * k.c + s) -= (wc * fix) * n;
+    v.row(2 * k.a + s) += (2.0 * wa * away) * n;
+    v.row(2 * k.b + s) -= (wb * away) * n;
+    v.row(2 * k.c + s) -= (wc * away) * n;
+  }
+  return 1;
 }
 
 int StrainLimit::apply(double limit, RowMatX3& x, RowMatX3& v, const Eigen::VectorXd& mass,
@@ -67,6 +100,7 @@ int StrainLimit::apply(double limit, RowMatX3& x, RowMatX3& v, const Eigen::Vect
       }
       ++corrected;
     }
+    for (const Corner& k : corner_) corrected += limit_corner(k, limit, x, v, mass, slot);
     if (sweep == 0) first = corrected;
     if (corrected == 0) break;
   }

@@ -42,7 +42,13 @@ class StrainLimit {
   /// sheet beside them stretch 5.5-7.2 % (docs/dynamics.md §3.4). Gauss-Seidel sweeps in a
   /// fixed order (deterministic), at most kSweeps; a pair beyond the limit is put kInside of it
   /// inside, and loses the part of its centres' relative speed that takes it further out.
-  /// Returns the pairs corrected in the first sweep.
+  /// At each corner of a grid lattice the sheet's diagonal there, x_b + x_c - 2 x_a for the
+  /// corner couple a and its two neighbours b and c, is kept within the same bound of its
+  /// rest length: near a lattice corner the mesh is the corner cell's bilinear map, whose
+  /// tangent along the diagonal is that vector, and with the cell's sides long and its cross
+  /// diagonal short (each within the limit) it was 7.9 % long at a pinned corner, and the mesh's
+  /// diagonal edges there 6.6 % (docs/dynamics.md §3.4, "Corners").
+  /// Returns the pairs (and corners) corrected in the first sweep.
   int apply(double limit, RowMatX3& x, RowMatX3& v, const Eigen::VectorXd& mass,
             const std::vector<int>& slot);
 
@@ -56,6 +62,13 @@ class StrainLimit {
   std::vector<int> ca_, cb_;    // couples
   std::vector<double> rest_;    // rest distance between their centres
   std::vector<int> candidates_; // scratch: pairs that may be corrected this call
+  struct Corner {
+    int a, b, c;    // the corner couple and its two neighbours along the grid
+    double rest;    // |x_b + x_c - 2 x_a| at rest (centres)
+  };
+  std::vector<Corner> corner_;
+  int limit_corner(const Corner& k, double limit, RowMatX3& x, RowMatX3& v, const Eigen::VectorXd& mass,
+                   const std::vector<int>& slot) const;
 };
 
 }  // namespace thinburn

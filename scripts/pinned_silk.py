@@ -5,7 +5,8 @@ seconds 1 to 5, the mesh's largest move in a frame over the last second, and the
 
 With --corners, instead: after 3 s, per pin the largest strain of the mesh edges within 3 cm
 of it (--mirror mirrors the mesh in x, so its diagonals run the other way), the couples' sides
-at the two pinned corners, and the most squashed edge and where it lies.
+and the diagonal x_b + x_c - 2 x_a at the two pinned corners, and the most squashed edge and
+where it lies.
 
     python scripts/pinned_silk.py [--lattices 16 32] [--k-limit 1] [--corners [--mirror]]
 """
@@ -80,12 +81,16 @@ def corners(v, f, pins, strain, a):
         c = sim.lattice_positions().reshape(m, m, 2, 3).mean(2)
         r = sim.lattice_rest_positions().reshape(m, m, 2, 3).mean(2)
         side = lambda p, q: 100 * (np.linalg.norm(c[p] - c[q]) / np.linalg.norm(r[p] - r[q]) - 1)  # noqa: E731
+        # The corner's diagonal x_b + x_c - 2 x_a (docs/dynamics.md §3.4, "Corners").
+        diag = lambda a, b, d: 100 * (np.linalg.norm(c[b] + c[d] - 2 * c[a]) /  # noqa: E731
+                                      np.linalg.norm(r[b] + r[d] - 2 * r[a]) - 1)
         near = [100 * signed[np.linalg.norm(mid - v[p], axis=1) < 0.03].max() for p in pins]
         k = int(np.argmin(signed))
         print(f"lattice {m}{' (mirrored)' if a.mirror else ''}: edges within 3 cm of the pin at x = "
               f"{v[pins[0], 0]:.1f} m at most {near[0]:.2f} % long, of the pin at x = {v[pins[1], 0]:.1f} m "
               f"{near[1]:.2f} %; the pinned corners' couple sides {side((-1, 0), (-1, 1)):.2f} / "
-              f"{side((-1, 0), (-2, 0)):.2f} % and {side((-1, -1), (-1, -2)):.2f} / {side((-1, -1), (-2, -1)):.2f} %; "
+              f"{side((-1, 0), (-2, 0)):.2f} % and {side((-1, -1), (-1, -2)):.2f} / {side((-1, -1), (-2, -1)):.2f} %, "
+              f"their diagonals {diag((-1, 0), (-1, 1), (-2, 0)):.2f} and {diag((-1, -1), (-1, -2), (-2, -1)):.2f} %; "
               f"the most squashed edge {100 * signed[k]:.2f} % at x = {mid[k, 0]:.3f}, z = {mid[k, 2]:.3f} m "
               f"(rest)", flush=True)
 

@@ -64,6 +64,31 @@ def test_spring_forces_are_minus_the_energy_gradient(soft):
         assert dyn.energy() > 1.05 * kneeless.energy()
 
 
+def test_the_knee_stores_its_closed_form_energy_on_pairs_and_corners():
+    # Beyond (1 + 0.8 strain_limit) of its rest length a pair of neighbouring couples' centres
+    # stores k_limit * stiffness_unit / 2 * (l - end)^2 on top of its springs, and so does each
+    # corner's diagonal g = c_b + c_c - 2 c_a (cpp/membrane.hpp, add_corners).
+    soft = SOFT[2]
+    lat, dyn, x = perturbed(**soft)
+    _, kneeless, _ = perturbed(**{**soft, "k_limit": 0.0})
+    assert dyn.membrane_corners == 4
+    M, k, knee = 3, soft["k_limit"] * 1000.0, 1 + 0.8 * soft["strain_limit"]
+    c = x.reshape(M, M, 2, 3).mean(axis=2)
+    r = lat.rest.reshape(M, M, 2, 3).mean(axis=2)
+    pairs = [((i, j), (i + di, j + dj)) for i in range(M) for j in range(M)
+             for di, dj in ((1, 0), (0, 1), (1, 1)) if i + di < M and j + dj < M]
+    pairs += [((i + 1, j), (i, j + 1)) for i in range(M - 1) for j in range(M - 1)]
+    beyond = [np.linalg.norm(c[b] - c[a]) - knee * np.linalg.norm(r[b] - r[a]) for a, b in pairs]
+    corners = []
+    for i, j in ((0, 0), (0, M - 1), (M - 1, 0), (M - 1, M - 1)):
+        di, dj = (1 if i == 0 else -1), (1 if j == 0 else -1)
+        g = lambda p: p[i + di, j] + p[i, j + dj] - 2 * p[i, j]
+        corners.append(np.linalg.norm(g(c)) - knee * np.linalg.norm(g(r)))
+    over = np.maximum(beyond + corners, 0.0)
+    assert np.sum(np.array(corners) > 0) >= 2  # perturbed() takes corners past their knee
+    assert dyn.energy() - kneeless.energy() == pytest.approx(0.5 * k * np.sum(over ** 2), rel=1e-10)
+
+
 @pytest.mark.parametrize("soft", SOFT)
 def test_stiffness_matrix_is_the_jacobian_of_the_forces(soft):
     lat, dyn, x = perturbed(1, **soft)

@@ -97,12 +97,13 @@ def silk_demo(cells, **params):
     return scene, sim
 
 
-@pytest.mark.parametrize("k_limit, measured", [(0.0, 4.52e-3), (None, 1.23e-6)])
+@pytest.mark.parametrize("k_limit, measured", [(0.0, 3.50e-3), (None, 1.23e-6)])
 def test_a_hanging_silk_rests_where_it_would_at_any_step(k_limit, measured):
     # The silk demo held at its corners, 6 s without fire. Held by the strain limit's projection
     # alone (k_limit=0), the shape it rests in depends on the substep: the projection moves the
     # couples in the mass metric, the implicit step in that of M + h^2 K, and they agree only as
-    # h -> 0 (measured: the lowest point 4.52 mm lower at one substep a frame than at 64). On the
+    # h -> 0 (measured: the lowest point 3.50 mm lower at one substep a frame than at 64; 4.52
+    # before the lattice's corners had a limit of their own, cpp/strain_limit.hpp). On the
     # knee's stiffness the rest is the forces' balance, whatever h: 1.23e-6 m apart (bound 2.5e-6).
     kw = {} if k_limit is None else dict(k_limit=k_limit)
     low = {}
@@ -121,8 +122,10 @@ def test_burning_silk_does_not_twitch(k_limit):
     # The silk demo at 128 cells, seconds 1 to 5 of its burn. Without the knee the sheet sat
     # 11 mm lower at one substep a frame than at 64, and every 7-11 frames a step whose thickness
     # springs had grown was redone with 15-17 substeps, which lifted the sheet 10 mm for a frame
-    # (measured: the mesh's largest move in a frame 12.6 mm, 6 redos). With it 0.27 mm, none
-    # (the burning band, weaker, moving: its knee follows its strength).
+    # (measured: the mesh's largest move in a frame 12.6 mm, 6 redos; 13.6 mm and 2 since the
+    # lattice's corners have a limit, docs/dynamics.md §3.4 "Corners"). With it 0.17 mm, none
+    # (0.27 mm before the corners; the burning band, weaker, moving: its knee follows its
+    # strength).
     from thinburn.demo import build, default_scene
     sim = build(default_scene("silk"), "silk", cells=128)
     if k_limit is not None:
@@ -136,6 +139,6 @@ def test_burning_silk_does_not_twitch(k_limit):
         redos += sim.step_stats()["substeps_by"] == "stretch_redo"
         prev = x
     if k_limit == 0.0:
-        assert max(moves) > 0.010 and redos >= 3
+        assert max(moves) > 0.010 and redos >= 2
     else:
-        assert max(moves) < 0.35e-3 and redos == 0
+        assert max(moves) < 0.25e-3 and redos == 0

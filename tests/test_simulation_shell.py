@@ -74,7 +74,7 @@ def test_a_sheet_landing_on_its_edge_keeps_its_bottom_row(material, bound):
     assert worst < bound
 
 
-@pytest.mark.parametrize("material, median_bound", [("cloth", 0.025), ("silk", 0.022)])
+@pytest.mark.parametrize("material, median_bound", [("cloth", 0.025), ("silk", 0.018)])
 def test_a_fabric_collapsing_into_a_pile_keeps_its_edge_lengths(material, median_bound):
     """A 20 cm fabric dropped upright (cells 128: 9 x 9 couples) collapses into a pile 1-3 cm
     high, its lattice folded through up to 107 degrees between couples. Where the lattice
@@ -85,7 +85,8 @@ def test_a_fabric_collapsing_into_a_pile_keeps_its_edge_lengths(material, median
     take turns while layers touch (docs/dynamics.md §3.4): cloth 0.65-2.98 %, median 2.13 %
     (0.66 % before, but one drop 4.77 %: its bottom row now sits at the 3 % limit in three
     drops), silk 2.27-4.91 %, median 3.17 % (7.53 % before, drops up to 14.8 %); since the
-    membrane's knee (§3.4, "The knee") silk 0.42-2.91 %, median 1.86 %. Issue #12 asks 5 % of
+    membrane's knee (§3.4, "The knee") silk 0.42-2.91 %, median 1.86 %; since the corners'
+    limit and knee (§3.4, "Corners") silk 0.45-2.40 %, median 1.54 %. Issue #12 asks 5 % of
     fabrics: every drop must stay under 5.5 %."""
     from thinburn._mesh_measures import EdgeStrain
     strains = []
@@ -452,8 +453,10 @@ def test_both_implicit_integrators_converge_in_dt_to_one_motion():
 def test_fig9_cloth_held_at_its_corners_sinks_as_it_burns():
     """Fig. 9: the demo's 40 cm cloth held at its corners, lit in the middle, sinks once burnt
     cells have lost their mass and most of their strength. Lowest point after 8 s (the sag has
-    settled) and after the whole burn (90 s): 217.8 -> 207.1 mm measured, 10.7 mm down (14.7 mm
-    before the membrane's knee, docs/dynamics.md §3.4, held burnt pairs at 2.4 % rather than 3 %;
+    settled) and after the whole burn (90 s): 217.8 -> 210.6 mm measured, 7.2 mm down (10.7 mm
+    before the lattice's corners had a limit and a knee of their own, docs/dynamics.md §3.4
+    "Corners", which hold the pinned corner cells' diagonals; 14.7 mm before the membrane's knee
+    held burnt pairs at 2.4 % rather than 3 %;
     it rises 8 mm while it burns, lifted by its heat). With the lattice's own bending it sank 2.65 mm;
     with soft bending and ash as strong as it is heavy (ash_strength 0.1) it hung back at
     217.77 mm (docs/materials.md, ash_strength)."""
@@ -465,7 +468,7 @@ def test_fig9_cloth_held_at_its_corners_sinks_as_it_burns():
     before = sim.vertex_positions()[:, 2].min()
     sim.run(82.0, dt=1 / 24)
     assert np.mean(sim.vertex_char() > 0.5) == 1.0  # all burnt
-    assert before - sim.vertex_positions()[:, 2].min() > 0.01
+    assert before - sim.vertex_positions()[:, 2].min() > 0.006
 
 
 def _mesh_edges(faces):

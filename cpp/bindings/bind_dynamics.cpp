@@ -147,7 +147,9 @@ void define_dynamics(py::module_& m) {
       .def_property_readonly("bending_share", &LatticeDynamics::bending_share,
                              "Share of the lattice's own bending its layer springs keep (flexural_rigidity / lattice_rigidity, <= 1).")
       .def_property_readonly("membrane_springs", &LatticeDynamics::membrane_springs,
-                             "Membrane springs between couples' centres (0 while bending_share is 1).");
+                             "Membrane springs between couples' centres (0 while bending_share is 1).")
+      .def_property_readonly("membrane_corners", &LatticeDynamics::membrane_corners,
+                             "Lattice corners whose diagonal stiffens beyond the knee (4 on a grid with membrane springs).");
 
   m.def(
       "explicit_stability_limit",
