@@ -15,7 +15,8 @@ An artist's trial (docs/blender.md): ``table`` (A4 paper on a cube with Collisio
 Floor; ``--table-floor`` makes the cube its Floor Object instead), ``silk`` (a silk curtain
 pinned along its top in a Wind field, with ``--stretch-limit``), ``lantern`` (a cylinder
 without caps lit at its bottom), ``rod`` (cloth dropped over a thin cylinder with Collision),
-``pile`` (cloth let go upright on a table: it folds into a pile). ``--without-addon`` then
+``pile`` (cloth let go upright on a table: it folds into a pile), ``corners`` (a 60 cm silk held
+at its two top corners, Motion Detail --lattice). ``--without-addon`` then
 saves the .blend, disables the add-on, reopens it, renders the same frames again and prints
 the largest pixel difference.
 """
@@ -286,8 +287,44 @@ def pile(args):
     return sheet, ((0.55, -0.6, 0.35), (0.0, 0.0, 0.08)), measure
 
 
+def corners(args):
+    """A 60 cm silk held at its two top corners (vertex group "corners", Pin Group), Motion
+    Detail --lattice, lit at the middle of its hem: the lattice's pinned corners (docs/dynamics.md
+    §3.4, "Corners")."""
+    import bpy
+    n = args.n
+    xs, zs = np.linspace(-0.3, 0.3, n), np.linspace(0.2, 0.8, n)
+    sheet = _upright_sheet("Silk", xs, zs)
+    sheet.data.materials.append(_material("Silk", (0.6, 0.15, 0.2)))
+    bpy.context.view_layer.objects.active = sheet
+    bpy.ops.object.shade_smooth()
+    pins = [n * (n - 1), n * n - 1]
+    sheet.vertex_groups.new(name="corners").add(pins, 1.0, "REPLACE")
+    s = H.setup_bake(sheet, frames=args.frames, cells=args.cells, cache_dir=args.cache, floor=False)
+    s.threads, s.material, s.lattice, s.mat_V0 = 0, "silk", args.lattice, args.v0
+    s.flame_intensity, s.flame_temperature = 2.0, 1700.0
+    s.pin_group = "corners"
+    H.make_igniter(sheet, (0.0, 0.0, 0.2), lit_from=1, radius=args.radius)
+    edges = H.mesh_edges(sheet)
+    quads = np.array([list(p.vertices) for p in sheet.data.polygons])
+    # The quads' sides and both diagonals: Blender renders each quad as two triangles.
+    pairs = np.concatenate([edges, quads[:, [0, 2]], quads[:, [1, 3]]])
+
+    def measure(rest, world):
+        strain = H.edge_strain(rest, world, edges)  # per frame, the largest |l / L - 1|
+        mid = 0.5 * (rest[pairs[:, 0]] + rest[pairs[:, 1]])
+        near = np.linalg.norm(mid[:, None, :] - rest[pins][None, :, :], axis=2).min(axis=1) < 0.03
+        length = lambda x: np.linalg.norm(x[pairs[:, 0]] - x[pairs[:, 1]], axis=1)  # noqa: E731
+        base = length(rest)
+        by_pins = max(float(np.abs(length(f)[near] / base[near] - 1.0).max()) for f in world)
+        return {"max_edge_strain": round(float(strain.max()), 4),
+                "max_strain_within_3cm_of_the_pins_sides_and_diagonals": round(by_pins, 4),
+                "pinned_largest_motion_mm": round(1e3 * float(np.linalg.norm(world[:, pins] - rest[pins], axis=2).max()), 3)}
+    return sheet, ((0.0, -1.6, 0.5), (0.0, 0.0, 0.5)), measure
+
+
 SCENES = {"drape": drape, "curtain": curtain, "table": table, "silk": silk, "lantern": lantern,
-          "rod": rod, "pile": pile}
+          "rod": rod, "pile": pile, "corners": corners}
 
 
 def bake_and_measure(name, args):
