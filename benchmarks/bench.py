@@ -14,8 +14,9 @@ Parts (in this order; all by default):
                damped (c = 3 /s): error at T = 1 s against the closed-form damped oscillator,
                relative to the initial displacement, for several dt; plus the largest stable
                dt (bisection, undamped) at several stiffnesses against theory.
-  motion       the demo scenes (paper on its table, with and without 3 m/s wind; silk; the
-               curtain in its wind and in 3 m/s along its plane) at dt = 1/24, 1/48, 1/96 (and 1/192) s with the implicit,
+  motion       every preset's demo scene (paper and hard paper on a table, cloth and silk held
+               at their corners, each with and without 3 m/s wind along +x; the curtain in its
+               wind and in 3 m/s along its plane) at dt = 1/24, 1/48, 1/96 (and 1/192) s with the implicit,
                bdf2 and symplectic integrators: RMS vertex error after 20 s (--quick: 5 s, two
                scenes) against a backward-Euler run at 1/480 s (--quick: 1/240), over the
                reference's RMS motion, against seconds per run (benchmarks/motion.py).

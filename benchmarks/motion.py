@@ -19,8 +19,13 @@ from .perf import _pyplot, save_figure
 
 MOTION_INTEGRATORS = ("implicit", "bdf2", "symplectic")
 # (label, preset, wind along +x in m/s or None for the scene's own)
+# Every preset's demo scene (demo.default_scene), with and without wind (issue #12, item 3).
 MOTION_SCENES = (("paper on a table", "paper", None), ("paper on a table, 3 m/s wind", "paper", 3.0),
-                 ("silk on a table", "silk", None), ("curtain in its wind", "curtain", None),
+                 ("hard paper on a table", "hard_paper", None),
+                 ("hard paper on a table, 3 m/s wind", "hard_paper", 3.0),
+                 ("cloth held at its corners", "cloth", None), ("cloth held, 3 m/s wind", "cloth", 3.0),
+                 ("silk held at its corners", "silk", None), ("silk held, 3 m/s wind", "silk", 3.0),
+                 ("curtain in its wind", "curtain", None),
                  # Along its plane the curtain flutters or stands out as a sail (docs/dynamics.md §9).
                  ("curtain, 3 m/s wind along its plane", "curtain", 3.0))
 
@@ -64,8 +69,15 @@ def plot_motion(rows, path):
     plt = _pyplot()
     mrows = [r for r in rows if r["part"] == "motion"]
     scenes = list(dict.fromkeys(r["scene"] for r in mrows))
-    fig, axes = plt.subplots(2, len(scenes), figsize=(4.2 * len(scenes), 7.5), squeeze=False)
-    for col, scene in enumerate(scenes):
+    # Scenes in bands of at most five columns, each band a row against dt over one against time.
+    ncols = min(5, len(scenes))
+    bands = -(-len(scenes) // ncols)
+    fig, grid = plt.subplots(2 * bands, ncols, figsize=(4.2 * ncols, 7.5 * bands), squeeze=False)
+    for ax in grid.flat:
+        ax.set_visible(False)
+    for k, scene in enumerate(scenes):
+        band, col = divmod(k, ncols)
+        axes = grid[2 * band: 2 * band + 2]
         srows = [r for r in mrows if r["scene"] == scene]
         for j, m in enumerate(MOTION_INTEGRATORS):
             mr = sorted((r for r in srows if r["method"] == m), key=lambda r: -r["dt"])
@@ -74,9 +86,10 @@ def plot_motion(rows, path):
             err = [max(r["error"], 1e-4) for r in mr]
             axes[0][col].plot([r["dt"] for r in mr], err, "o-", color=f"C{j}", label=m)
             axes[1][col].plot([r["seconds"] for r in mr], err, "o-", color=f"C{j}", label=m)
-        axes[0][col].set_title(f"{scene}\n(reference moved {1000 * srows[0]['moved']:.1f} mm)", fontsize=9)
+        axes[0][col].set_title(f"{scene}\n(reference moved {1000 * srows[0]['moved']:.3g} mm)", fontsize=9)
         for row, xl in ((0, "dt (s)"), (1, "seconds per run")):
             ax = axes[row][col]
+            ax.set_visible(True)
             ax.set_xscale("log")
             ax.set_yscale("log")
             ax.axhline(0.15, color="k", lw=0.8, ls="--", label="15 % (issue #12)")
