@@ -639,11 +639,12 @@ class BakeJob:
         if ignited == 0:
             self.message += " (no lit igniter touched the sheet)"
         if self.stretch is not None:
-            worst, at = self.stretch.largest(burnout)
+            signed, at = self.stretch.largest_signed(burnout)
+            worst = abs(signed)
             self.max_strain, self.max_strain_frame = worst, at
             for obj in objs:
                 obj.thinburn.baked_strain = worst
-            text = stretch.stretch_warning(self.obj_name, worst, at, self.lattice,
+            text = stretch.stretch_warning(self.obj_name, signed, at, self.lattice,
                                            crumple=self.crumple_gain, fit=(self.shape or {}).get("fit"),
                                            couples=(self.shape or {}).get("couples"))
             if text:

@@ -174,7 +174,7 @@ class PHYSICS_PT_thinburn_cache(ThinBurnPhysicsPanel, bpy.types.Panel):
                 warning_free = settings.baked_strain <= stretch.WARN_STRAIN
                 text = f"As {settings.baked_shape}"
                 if settings.baked_strain > 0.0:
-                    text += f"; edges stretched up to {100 * settings.baked_strain:.0f} %"
+                    text += f"; edge lengths changed up to {100 * settings.baked_strain:.0f} %"
                 layout.label(text=text, icon="INFO" if warning_free else "ERROR")
 
 

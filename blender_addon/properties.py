@@ -331,7 +331,7 @@ class ThinBurnSettings(bpy.types.PropertyGroup):
         description="What the core made of the sheet in the current bake: a flat sheet (the "
                     "paper's grid) or a curved shell (cells on its surface); set by the bake")
     baked_strain: FloatProperty(
-        name="Largest Stretch", default=0.0, options=STATIC,
+        name="Largest Strain", default=0.0, options=STATIC,
         description="The largest |length / rest length - 1| of an edge over the current bake "
                     "(Crumple on; set by the bake)")
     # What the bake wrote, so that Free removes all of it after a rename, and the file that made

@@ -14,23 +14,25 @@ import numpy as np
 
 WARN_STRAIN = 0.5  # |length / rest length - 1| above which the bake's report warns
 # Edges whose chords strain past this are measured along the surface as well (worker.py,
-# edge_strains), so the report and the Bake panel's "edges stretched up to" are the sheet's.
+# edge_strains), so the report and the Bake panel's "edge lengths changed up to" are the sheet's.
 ALONG_FROM = 0.01
 
 
 def chord_strains(positions: np.ndarray, a: np.ndarray, b: np.ndarray, rest: np.ndarray) -> np.ndarray:
-    """|l / L - 1| per edge (a[i], b[i]) of rest length rest[i]: np.take and einsum, a third of
-    fancy indexing and norm's time on a 16k mesh's 48k edges (a probe)."""
+    """l / L - 1 per edge (a[i], b[i]) of rest length rest[i] (< 0: shorter): np.take and
+    einsum, a third of fancy indexing and norm's time on a 16k mesh's 48k edges (a probe)."""
     d = np.take(positions, a, axis=0)
     d -= np.take(positions, b, axis=0)
     strain = np.sqrt(np.einsum("ij,ij->i", d, d))
     strain /= rest
     strain -= 1.0
-    return np.abs(strain, out=strain)
+    return strain
 
 
 class StretchMeter:
-    """Per edge of the mesh, the largest |length / rest - 1| over the frames fed to it."""
+    """Per edge of the mesh, the largest |length / rest - 1| over the frames fed to it, and
+    whether the edge was longer or shorter then (an artist told "stretched" of a cloth whose
+    edges had shrunk to a third looked for the wrong fault)."""
 
     def __init__(self, rest: np.ndarray, edges: np.ndarray):
         rest = np.asarray(rest, dtype=np.float64)
@@ -41,6 +43,7 @@ class StretchMeter:
         self.rest = length[keep]
         self.ends = (np.ascontiguousarray(self.edges[:, 0]), np.ascontiguousarray(self.edges[:, 1]))
         self.worst = np.zeros(len(self.edges))
+        self.worst_signed = np.zeros(len(self.edges))  # length / rest - 1 at the worst frame
         self.worst_frame = np.zeros(len(self.edges))
         self.creased = 0  # the most edges in a frame measured along the surface, not as chords
 
@@ -50,16 +53,23 @@ class StretchMeter:
         self.add_strains(chord_strains(p, *self.ends, self.rest), 0, frame)
 
     def add_strains(self, strain: np.ndarray, creased: int, frame: float) -> None:
-        """One frame's |l/L - 1| per edge, `creased` of them measured along the surface (the
-        bake's worker: worker.CoreWorker.edge_strains)."""
+        """One frame's l/L - 1 per edge (< 0: shorter), `creased` of them measured along the
+        surface (the bake's worker: worker.CoreWorker.edge_strains)."""
         self.creased = max(self.creased, int(creased))
-        more = strain > self.worst
-        self.worst[more] = strain[more]
+        size = np.abs(strain)
+        more = size > self.worst
+        self.worst[more] = size[more]
+        self.worst_signed[more] = strain[more]
         self.worst_frame[more] = frame
 
     def largest(self, burnout_frames=None) -> tuple:
-        """(strain, frame) of the most stretched edge; with ``burnout_frames`` (per vertex), an
+        """(|strain|, frame) of the most strained edge; with ``burnout_frames`` (per vertex), an
         edge counts only while one of its vertices has not burnt out."""
+        strain, frame = self.largest_signed(burnout_frames)
+        return abs(strain), frame
+
+    def largest_signed(self, burnout_frames=None) -> tuple:
+        """(length / rest - 1, frame) of the most strained edge (< 0: it shrank), as largest."""
         worst = self.worst
         if burnout_frames is not None and len(worst):
             b = np.asarray(burnout_frames, dtype=np.float64)
@@ -68,20 +78,25 @@ class StretchMeter:
         if not len(worst) or not np.any(worst > 0):
             return 0.0, None
         k = int(np.argmax(worst))
-        return float(worst[k]), float(self.worst_frame[k])
+        return float(self.worst_signed[k]), float(self.worst_frame[k])
 
 
 def stretch_warning(name: str, strain: float, frame, lattice: int, crumple=None, fit=None,
                     couples=None) -> str | None:
-    """The report's words for a bake that stretched an edge by more than WARN_STRAIN. crumple:
+    """The report's words for a bake that stretched or squashed an edge by more than WARN_STRAIN
+    (strain: length / rest - 1 of the worst edge, < 0 where it shrank). crumple:
     the Crumple Amount baked (None: unknown); fit: the core's lattice fit (how far, in half
     layer thicknesses, the mesh lies off its curved shell's lattice; None or 0 on a flat one);
     couples: how many the lattice had (for a Motion Detail to suggest)."""
-    if frame is None or strain <= WARN_STRAIN:
+    if frame is None or abs(strain) <= WARN_STRAIN:
         return None
     motion = "0: the core's choice" if lattice == 0 else f"{lattice}"
-    text = (f"'{name}' stretched: an edge reached {1.0 + strain:.1f}× its rest length at frame "
-            f"{frame:.0f} (a sheet hardly stretches), so the motion misbehaved there. ")
+    if strain > 0.0:
+        text = (f"'{name}' stretched: an edge reached {1.0 + strain:.1f}× its rest length at frame "
+                f"{frame:.0f} (a sheet hardly stretches), so the motion misbehaved there. ")
+    else:
+        text = (f"'{name}' squashed: an edge shrank to {1.0 + strain:.2f}× its rest length at frame "
+                f"{frame:.0f} (a sheet hardly shrinks), so the motion misbehaved there. ")
     # Motion Detail counts couples along the square root of the area: twice as many per side as
     # the core chose (or as set) halves their spacing. A fixed suggestion ("such as 9") named
     # the lattice the core had already chosen for a 48-cell sheet, which changed nothing.

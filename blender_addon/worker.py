@@ -168,7 +168,7 @@ class CoreWorker(threading.Thread):
         return ("frame", task.index, positions, lit, particles, strains)
 
     def edge_strains(self, sim, positions):
-        """(strains, creased): per stretch-meter edge, |l/L - 1| now, and how many of them were
+        """(strains, creased): per stretch-meter edge, l/L - 1 now, and how many of them were
         measured along the surface. An edge whose chord strains past ALONG_FROM is measured
         along the surface (Simulation.surface_lengths): where the lattice folds sharply
         between couples its surface creases along the couple line, and an edge across the
@@ -179,12 +179,12 @@ class CoreWorker(threading.Thread):
             return None
         e0, e1, rest = self._stretch_edges
         strain = chord_strains(positions, e0, e1, rest)
-        over = np.flatnonzero(strain > ALONG_FROM)
+        over = np.flatnonzero(np.abs(strain) > ALONG_FROM)
         if not over.size:
             return strain, 0
         # The add-on ships its own core, which has surface_lengths on every lattice.
         along = sim.surface_lengths(np.stack([e0[over], e1[over]], axis=1))
-        strain[over] = np.abs(along / rest[over] - 1.0)
+        strain[over] = along / rest[over] - 1.0
         return strain, len(over)
 
     def _collide(self, sim, colliders: list) -> None:

@@ -229,14 +229,14 @@ def test_crumpling_keeps_edge_lengths(addon, tmp_path, scene):
     assert sheet.thinburn.baked_shape.startswith("a curved shell" if scene == "lantern" else "a flat sheet")
     assert np.linalg.norm(frames - frames[0], axis=2).max() < 0.05
     assert np.abs(frames[0] - rest).max() < 1e-3  # the first frame is the rest shape (lifted 0.5 mm)
-    assert not [w for w in job.warnings if "stretched" in w]
+    assert not [w for w in job.warnings if "stretched" in w or "squashed" in w]
     # the Bake panel says what the sheet was baked as, and how far it stretched
     from test_addon import _Context, _Layout
     drawn = []
     panel = addon.panels.PHYSICS_PT_thinburn_cache
     panel.draw(type("P", (), {"layout": _Layout(drawn)})(), _Context(sheet))
     shown = [d for d in drawn if d.startswith("label: As a ")]
-    assert shown and "edges stretched up to" in shown[0], drawn
+    assert shown and "edge lengths changed up to" in shown[0], drawn
 
 
 def test_stretch_meter_and_its_warning(addon):
@@ -268,6 +268,24 @@ def test_stretch_meter_and_its_warning(addon):
     assert "higher, e.g. 20" in text and "Crumple Amount" not in text
 
 
+def test_a_squashed_edge_is_called_squashed(addon):
+    """An artist's cloth on a ball had an edge shrink to 0.35x its rest length, and the report
+    said it "stretched: an edge reached 1.6x": the meter keeps the sign of the worst strain."""
+    meter = addon.stretch.StretchMeter(np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0.0]]),
+                                       np.array([[0, 1], [1, 2]]))
+    meter.add(np.array([[0, 0, 0], [1.1, 0, 0], [1.1, 1, 0.0]]), 4)   # +10 % along x
+    meter.add(np.array([[0, 0, 0], [1, 0, 0], [1, 0.35, 0.0]]), 12)  # the other edge -65 %
+    assert meter.largest() == pytest.approx((0.65, 12.0))
+    assert meter.largest_signed() == pytest.approx((-0.65, 12.0))
+    text = addon.stretch.stretch_warning("Cloth", -0.65, 12.0, 0, couples=81)
+    assert text.startswith("'Cloth' squashed: an edge shrank to 0.35× its rest length at frame 12")
+    assert "stretched" not in text and "Motion Detail" in text
+    assert addon.stretch.stretch_warning("Cloth", -0.4, 12.0, 0) is None  # within WARN_STRAIN
+    # a larger stretch later takes over, with its sign
+    meter.add(np.array([[0, 0, 0], [1.8, 0, 0], [1.8, 1, 0.0]]), 20)
+    assert meter.largest_signed() == pytest.approx((0.8, 20.0))
+
+
 def test_a_bake_that_stretches_is_warned_about(addon, tmp_path, monkeypatch):
     monkeypatch.setattr(addon.stretch, "WARN_STRAIN", 1e-4)  # any motion at all
     sheet = make_sheet(n=17, size=0.2, z=0.0)
@@ -276,7 +294,7 @@ def test_a_bake_that_stretches_is_warned_about(addon, tmp_path, monkeypatch):
     make_igniter(sheet, (0.0, 0.0, 0.0), radius=0.03)
     job = _bake_report(addon, sheet)
     assert job.max_strain > 1e-4
-    assert any("'Sheet' stretched" in w for w in job.warnings), job.warnings
+    assert any("'Sheet' stretched" in w or "'Sheet' squashed" in w for w in job.warnings), job.warnings
 
 
 def test_quick_burn_lights_a_lantern_on_its_side_and_floors_it_on_the_table(addon, tmp_path):
@@ -334,4 +352,4 @@ def test_a_pile_creasing_between_couples_does_not_warn_of_stretch(addon, tmp_pat
     assert chords.max() > addon.stretch.WARN_STRAIN
     assert job.stretch.creased > 0
     assert job.max_strain < 0.05
-    assert not [w for w in job.warnings if "stretched" in w]
+    assert not [w for w in job.warnings if "stretched" in w or "squashed" in w]
