@@ -133,13 +133,38 @@ def _cache_folder(settings) -> str:
     return ""
 
 
+def _range_is_default(settings) -> bool:
+    props = type(settings).bl_rna.properties
+    return (settings.frame_start == props["frame_start"].default and
+            settings.frame_end == props["frame_end"].default)
+
+
+def _take_scene_range(obj, settings, scene):
+    """The bake takes the scene's frame range when the sheet has none of its own: it was not
+    enabled yet, or its Start and End are still their defaults (an artist who ticked the
+    ThinBurn box first, as docs/blender.md's steps say, then set the scene to 1-150, was baked
+    1-250 without a word). A range the artist set on the sheet is kept, and the report says so
+    where it differs from the scene's."""
+    own = (settings.frame_start, settings.frame_end)
+    wanted = (scene.frame_start, scene.frame_end)
+    if own == wanted:
+        return None
+    if not settings.enabled or _range_is_default(settings):
+        settings.frame_start, settings.frame_end = wanted
+        return None
+    return (f"'{obj.name}' bakes its own frames {own[0]}–{own[1]}, not the scene's {wanted[0]}–"
+            f"{wanted[1]} (Physics > ThinBurn > Start, End)")
+
+
 def setup(context, obj, points, scene_range: bool, exclude) -> list:
     """Quick Burn's settings on one sheet; returns notes for the report."""
     settings = obj.thinburn
     notes = []
     scene = context.scene
-    if not settings.enabled and scene_range:
-        settings.frame_start, settings.frame_end = scene.frame_start, scene.frame_end
+    if scene_range:
+        note = _take_scene_range(obj, settings, scene)
+        if note:
+            notes.append(note)
     settings.enabled = True
     _igniters(obj, points, settings.frame_start)
     if settings.floor_mode == "NONE":

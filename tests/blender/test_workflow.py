@@ -330,3 +330,22 @@ def test_quick_burn_says_when_the_fire_would_stay_a_small_spot(addon, tmp_path):
     settings.burn_duration = 0.0
     settings.mat_V0 = 80.0  # 77 mm in the shot, beyond a quarter of 28 cm
     assert addon.quick.slow_fire_note(sheet, settings, scene) is None
+
+
+def test_quick_burn_takes_the_scenes_range_unless_the_sheet_has_its_own(addon, tmp_path):
+    """An artist's trial ticked the ThinBurn box first (docs/blender.md's steps say so), set
+    the scene to 1-150 and ran Quick Burn: it baked 1-250, the box's defaults, without a word.
+    A sheet whose Start and End are still the defaults takes the scene's range; a range set on
+    the sheet is kept, and the report says it differs from the scene's."""
+    _, sheet = _quick_scene(tmp_path)
+    scene = bpy.context.scene
+    settings = sheet.thinburn
+    settings.enabled = True  # ticked first: Start, End still 1, 250
+    scene.frame_start, scene.frame_end = 1, 150
+    notes = addon.quick.setup(bpy.context, sheet, [(0.0, 0.0, 0.75)], scene_range=True, exclude={sheet.name})
+    assert (settings.frame_start, settings.frame_end) == (1, 150)
+    assert not [n for n in notes if "its own frames" in n], notes
+    settings.frame_start, settings.frame_end = 10, 40  # the artist's own range
+    notes = addon.quick.setup(bpy.context, sheet, [(0.0, 0.0, 0.75)], scene_range=True, exclude={sheet.name})
+    assert (settings.frame_start, settings.frame_end) == (10, 40)
+    assert [n for n in notes if "'Sheet' bakes its own frames 10–40, not the scene's 1–150" in n], notes
