@@ -45,6 +45,16 @@ class ProgressLines:
         self.t0 = _time.perf_counter()
         self.last = -1e9
 
+    def building(self) -> None:
+        """Before the core builds the sheet: a curved shell's cells take seconds."""
+        self.stream.write(f"ThinBurn: '{self.name}' building its fire cells and motion lattice\n")
+        self.stream.flush()
+
+    def built(self, job) -> None:
+        self.stream.write(f"ThinBurn: '{self.name}' built in {_time.perf_counter() - self.t0:.1f} s: "
+                          f"{describe_shape(job.shape)}\n")
+        self.stream.flush()
+
     def __call__(self, job, force: bool = False) -> None:
         now = _time.perf_counter()
         if not force and now - self.last < self.interval:
@@ -52,7 +62,8 @@ class ProgressLines:
         self.last = now
         frac = job.progress
         elapsed = now - self.t0
-        eta = f"{elapsed / frac - elapsed:.1f} s" if frac > 0 else "?"
+        left = job.seconds_left(now)
+        eta = "?" if left is None else f"{left:.1f} s"
         self.stream.write(f"ThinBurn: '{self.name}' frame {job.current_frame} "
                           f"({job.frames_done}/{len(job.frames)}, {100 * frac:5.1f} %) "
                           f"elapsed {elapsed:.1f} s, ETA {eta}\n")
@@ -273,6 +284,7 @@ class BakeJob:
         self.lit = 0
         self.finished = False
         self.started = _time.perf_counter()
+        self.built_at = None  # when the core had built the sheet (its cells and lattice)
         self.elapsed = 0.0
         self.message = ""
         # What the bake ignores, in an artist's words (the report shows them).
@@ -372,12 +384,21 @@ class BakeJob:
     def progress(self) -> float:
         return self.frames_done / len(self.frames)
 
+    def seconds_left(self, now=None):
+        """Seconds left at the frames' pace so far; None before the first frame. The pace is
+        counted from when the core had built the sheet: a curved shell's surface cells take
+        7-27 s before its first frame, and counted in, an artist's 10 s lantern bake was first
+        told "ETA 3384.7 s"."""
+        if self.frames_done <= 0 or self.built_at is None:
+            return None
+        now = _time.perf_counter() if now is None else now
+        return (now - self.built_at) / self.frames_done * (len(self.frames) - self.frames_done)
+
     def eta_text(self) -> str:
         """Time left at the pace so far ("12 s", "2 min 5 s"; "?" before the first frame)."""
-        frac = self.progress
-        if frac <= 0.0:
+        left = self.seconds_left()
+        if left is None:
             return "?"
-        left = (_time.perf_counter() - self.started) * (1.0 / frac - 1.0)
         return f"{left:.0f} s" if left < 60 else f"{int(left // 60)} min {left % 60:.0f} s"
 
     def status_text(self) -> str:
@@ -399,9 +420,12 @@ class BakeJob:
         self._drain(block=False)
         return self.finished
 
-    def run(self, progress=None) -> None:
-        """Bake to the end (background mode); ``progress(self)`` after each frame, if given."""
+    def run(self, progress=None, built=None) -> None:
+        """Bake to the end (background mode); ``progress(self)`` after each frame, and
+        ``built(self)`` once the core has built the sheet, if given."""
         self._await_shape(block=True)
+        if built is not None and self.shape is not None:
+            built(self)
         while not self.finished:
             self._sample_ahead(_time.perf_counter() + 1.0)
             self._drain(block=True)
@@ -552,6 +576,7 @@ class BakeJob:
 
     def _built(self, shape: dict) -> None:
         self.shape = shape
+        self.built_at = _time.perf_counter()
         if shape["spacing"] > 0:
             self.spacing = 0.5 * shape["spacing"]
 

@@ -59,8 +59,10 @@ def bake_now(context, obj, stream=None, interval: float = 1.0, on_frame=None) ->
         if on_frame is not None:
             on_frame(j)
     _running[scene.name] = job
+    if lines is not None:
+        lines.building()
     try:
-        job.run(progress=progress)
+        job.run(progress=progress, built=lines.built if lines is not None else None)
     except BakeError:
         raise
     except BaseException:

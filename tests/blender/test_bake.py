@@ -352,8 +352,27 @@ def test_a_background_bake_prints_its_progress(addon, tmp_path, capfd):
     make_igniter(sheet, (0.0, 0.0, 0.5), lit_from=1, radius=0.03)
     setup_bake(sheet, frames=6, cells=16, cache_dir=tmp_path)
     assert bpy.ops.thinburn.bake() == {"FINISHED"}
-    lines = [l for l in capfd.readouterr().err.splitlines() if l.startswith("ThinBurn: 'Sheet' frame")]
+    err = capfd.readouterr().err.splitlines()
+    lines = [l for l in err if l.startswith("ThinBurn: 'Sheet' frame")]
     assert lines and "ETA" in lines[0] and "%" in lines[0]
+    # It says what it builds before the first frame (a curved shell's cells take seconds), and
+    # what it built.
+    first = err.index(lines[0])
+    assert "ThinBurn: 'Sheet' building its fire cells and motion lattice" in err[:first], err
+    assert [l for l in err[:first] if l.startswith("ThinBurn: 'Sheet' built in ") and "16×16 fire cells" in l], err
+
+
+def test_the_eta_counts_the_frames_pace_from_when_the_sheet_was_built(addon):
+    """An artist's lantern took 23 s to build its surface cells, then baked 150 frames in a few
+    seconds: an ETA from the bake's start said 3384.7 s after the first frame."""
+    job = addon.job.BakeJob.__new__(addon.job.BakeJob)  # the clock's arithmetic only
+    job.frames, job.frames_done, job.started = list(range(1, 151)), 0, 100.0
+    job.built_at = None
+    assert job.seconds_left(130.0) is None
+    job.built_at, job.frames_done = 123.0, 1  # built 23 s after the start, a frame 0.1 s later
+    assert job.seconds_left(123.1) == pytest.approx(0.1 * 149)
+    job.frames_done = 50
+    assert job.seconds_left(128.0) == pytest.approx(5.0 / 50 * 100)
 
 
 def test_ash_flakes_land_on_the_top_of_the_floor_object(addon, tmp_path, monkeypatch):
