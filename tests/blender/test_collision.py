@@ -72,6 +72,9 @@ def test_a_thick_outer_is_named_in_the_report(addon, tmp_path):
     job.cancel()
     named = [w for w in job.warnings if "Outer thickness (20 mm)" in w]
     assert len(named) == 1 and "'Sphere'" in named[0] and "Softbody & Cloth" in named[0], job.warnings
+    # Outer is not the whole gap: the note says the lattice adds its thickness, and that a
+    # table top is best made the Floor Object (with Outer at 1 mm, A4 paper hovered 7.5 mm up).
+    assert "motion lattice about its thickness more" in named[0] and "Floor Object" in named[0]
 
 
 def test_blender_default_collision_settings_are_not_warned_about(addon):
