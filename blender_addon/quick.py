@@ -191,7 +191,8 @@ def slow_fire_note(obj, settings, scene):
     seconds = (settings.frame_end - settings.frame_start) * scene.render.fps_base / scene.render.fps
     speed = build_material(settings).V0  # mm/s
     reach = 1e-3 * speed * seconds
-    size = float(np.linalg.norm(np.ptp(_world_vertices(obj), axis=0)))
+    # Its longest side (an artist's 50 cm cloth was "71 cm across" by its box's diagonal).
+    size = float(np.max(np.ptp(_world_vertices(obj), axis=0)))
     if not (reach < 0.25 * size):
         return None
     return (f"'{obj.name}': at its Spread Speed ({speed:g} mm/s) the fire spreads about "

@@ -317,18 +317,18 @@ def test_quick_burn_says_when_the_fire_would_stay_a_small_spot(addon, tmp_path):
     3721 vertices in a 5 s shot, and nothing said why. Its report notes a fire that reaches less
     than a quarter of the sheet's size from Start to End, and the two settings that change it;
     not with a Burn Duration, nor at a Spread Speed that reaches that far."""
-    table, sheet = _quick_scene(tmp_path)  # a 0.2 m sheet (28 cm across), 24 frames: 1 s at 24 fps
+    table, sheet = _quick_scene(tmp_path)  # a 0.2 m sheet (20 cm across), 24 frames: 1 s at 24 fps
     settings = sheet.thinburn
     scene = bpy.context.scene
     notes = addon.quick.setup(bpy.context, sheet, [(0.0, 0.0, 0.75)], scene_range=True, exclude={sheet.name})
     slow = [n for n in notes if "Spread Speed" in n]
     # 23 frames at 24 fps: 0.96 s, 3.4 mm at paper's 3.5 mm/s
-    assert len(slow) == 1 and "3.5 mm/s" in slow[0] and "0.3 cm" in slow[0] and "28 cm" in slow[0], notes
+    assert len(slow) == 1 and "3.5 mm/s" in slow[0] and "0.3 cm" in slow[0] and "20 cm across" in slow[0], notes
     assert "Burn Duration" in slow[0]
     settings.burn_duration = 1.0
     assert addon.quick.slow_fire_note(sheet, settings, scene) is None
     settings.burn_duration = 0.0
-    settings.mat_V0 = 80.0  # 77 mm in the shot, beyond a quarter of 28 cm
+    settings.mat_V0 = 80.0  # 77 mm in the shot, beyond a quarter of 20 cm
     assert addon.quick.slow_fire_note(sheet, settings, scene) is None
 
 
