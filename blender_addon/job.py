@@ -598,7 +598,9 @@ class BakeJob:
             elif kind == "frame":
                 _, index, positions, lit, particles, strains = msg
                 if strains is not None:  # the worker measures when the bake has a meter
-                    self.stretch.add_strains(*strains, self.frames[index])
+                    strain, creased, turn = strains
+                    self.stretch.add_strains(strain, creased, self.frames[index])
+                    self.stretch.add_turn(turn, self.frames[index])
                 for sheet in self.sheets:
                     sheet.add(index, positions)
                 self.lit += lit
@@ -678,6 +680,11 @@ class BakeJob:
                                            couples=(self.shape or {}).get("couples"))
             if text:
                 self.warnings.append(text)
+            else:
+                text = stretch.crease_note(self.obj_name, self.stretch.turn, self.stretch.turn_frame,
+                                           self.lattice, (self.shape or {}).get("couples"))
+                if text:
+                    self.warnings.append(text)
         if self.tilt > TILT_WARNING_DEG:
             self.warnings.append(inputs.tilt_warning(self.obj_name, self.tilt))
 

@@ -46,6 +46,7 @@ class StretchMeter:
         self.worst_signed = np.zeros(len(self.edges))  # length / rest - 1 at the worst frame
         self.worst_frame = np.zeros(len(self.edges))
         self.creased = 0  # the most edges in a frame measured along the surface, not as chords
+        self.turn, self.turn_frame = 0.0, None  # the lattice's largest turn between couples (degrees)
 
     def add(self, positions: np.ndarray, frame: float) -> None:
         """One frame's positions, every edge measured as a chord."""
@@ -61,6 +62,11 @@ class StretchMeter:
         self.worst[more] = size[more]
         self.worst_signed[more] = strain[more]
         self.worst_frame[more] = frame
+
+    def add_turn(self, turn: float, frame: float) -> None:
+        """One frame's largest turn of the motion lattice between neighbouring couples."""
+        if turn > self.turn:
+            self.turn, self.turn_frame = float(turn), frame
 
     def largest(self, burnout_frames=None) -> tuple:
         """(|strain|, frame) of the most strained edge; with ``burnout_frames`` (per vertex), an
@@ -97,11 +103,7 @@ def stretch_warning(name: str, strain: float, frame, lattice: int, crumple=None,
     else:
         text = (f"'{name}' squashed: an edge shrank to {1.0 + strain:.2f}× its rest length at frame "
                 f"{frame:.0f} (a sheet hardly shrinks), so the motion misbehaved there. ")
-    # Motion Detail counts couples along the square root of the area: twice as many per side as
-    # the core chose (or as set) halves their spacing. A fixed suggestion ("such as 9") named
-    # the lattice the core had already chosen for a 48-cell sheet, which changed nothing.
-    per_side = lattice if lattice > 0 else (couples or 0) ** 0.5
-    finer = f", e.g. {max(9, int(round(2 * per_side)))}" if per_side > 0 else ""
+    finer = finer_detail(lattice, couples)
     if fit is not None and fit > 1.0:
         text += (f"Its mesh has detail finer than the motion lattice (pleats, waves, folds up to "
                  f"{fit:.1f} half layer-thicknesses off it): set Motion Detail (now {motion}) higher{finer}")
@@ -111,3 +113,31 @@ def stretch_warning(name: str, strain: float, frame, lattice: int, crumple=None,
     if crumple is None or crumple > 0.3:
         text += ", lower Crumple Amount (ThinBurn > Motion; e.g. 0.3)"
     return text + ", or switch Crumple off to burn the sheet in its rest shape"
+
+
+# From this turn between neighbouring couples on the mesh follows the couples wholly
+# (FoldBlend::kTo, docs/lattice.md): its folds are creases on the lattice's lines.
+CREASE_TURN = 40.0
+
+
+def finer_detail(lattice: int, couples) -> str:
+    """", e.g. N": twice the couples per side the bake had (at least 9), or "" when unknown.
+    Motion Detail counts couples along the square root of the area: twice as many per side as
+    the core chose (or as set) halves their spacing. A fixed suggestion ("such as 9") named the
+    lattice the core had already chosen for a 48-cell sheet, which changed nothing."""
+    per_side = lattice if lattice > 0 else (couples or 0) ** 0.5
+    return f", e.g. {max(9, int(round(2 * per_side)))}" if per_side > 0 else ""
+
+
+def crease_note(name: str, turn: float, frame, lattice: int, couples=None) -> str | None:
+    """The report's note for a bake whose motion lattice folded sharply where the sheet had not
+    burnt: its folds show as creases on the lattice's lines (an artist's cloth on a 10 cm ball
+    at the default lattice folded through 128 degrees into a four-sided tent). None below
+    CREASE_TURN."""
+    if frame is None or turn < CREASE_TURN:
+        return None
+    motion = "0: the core's choice" if lattice == 0 else f"{lattice}"
+    return (f"'{name}' folded sharply on its motion lattice (up to {turn:.0f}° between neighbouring "
+            f"couples, frame {frame:.0f}), so its folds show as creases along the lattice's lines: "
+            f"for finer, rounder folds set Motion Detail (now {motion}) higher{finer_detail(lattice, couples)} "
+            "(the bake takes longer)")

@@ -15,6 +15,8 @@ import numpy as np
 
 from thinburn import force_fields as fields
 
+from thinburn._mesh_measures import lattice_turns
+
 from .stretch import ALONG_FROM, chord_strains
 
 
@@ -150,6 +152,8 @@ class CoreWorker(threading.Thread):
         # A fresh array per frame (the main thread keeps it), written by the core directly.
         positions = sim.vertex_positions(out=np.empty((sim.n_vertices, 3)))
         strains = self.edge_strains(sim, positions)  # before the step: the same frame
+        if strains is not None:
+            strains += (self.lattice_turn(sim),)
         particles = None
         if self._want_particles:
             pts, temps = sim.particles()
@@ -166,6 +170,17 @@ class CoreWorker(threading.Thread):
                 sim.set_dynamics(**task.dynamics)
             sim.step(self._dt)
         return ("frame", task.index, positions, lit, particles, strains)
+
+    @staticmethod
+    def lattice_turn(sim) -> float:
+        """The largest turn (degrees) of a flat sheet's lattice between neighbouring couples
+        where the sheet has not burnt (control strength above a half); 0 on a curved shell.
+        Past 40 degrees the mesh follows the couples: a crease on the lattice's lines."""
+        if getattr(sim, "geometry", "plane") != "plane":
+            return 0.0
+        turn = lattice_turns(sim)
+        whole = sim.control_strength().min(axis=-1) > 0.5
+        return float(turn[whole].max()) if whole.any() else 0.0
 
     def edge_strains(self, sim, positions):
         """(strains, creased): per stretch-meter edge, l/L - 1 now, and how many of them were

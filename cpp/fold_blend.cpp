@@ -59,12 +59,22 @@ void FoldBlend::couple_weights(const FfdLattice& lattice) {
     }
 }
 
+void FoldBlend::set_keep_out(std::shared_ptr<const Colliders> colliders, double margin) {
+  keep_out_ = std::move(colliders);
+  keep_out_margin_ = margin;
+}
+
 void FoldBlend::apply(const FfdLattice& lattice, double z_min, Eigen::Ref<RowMatX3> out) {
   if (out.rows() != tri_.size()) throw std::invalid_argument("FoldBlend: out has the wrong number of rows");
   couple_weights(lattice);
   if (!any_) return;
-  const RowMatX3& x = lattice.positions();
   const RowMatX3& rest = lattice.rest();
+  const int M = lattice.M();
+  // Near a collider the spline's points stay: the blend fades in from keep_near to twice it
+  // beyond the margin (a share of one couple spacing).
+  const double keep_near = kKeepNear * std::max((centre(rest, 1) - centre(rest, 0)).norm(),
+                                                (centre(rest, M) - centre(rest, 0)).norm());
+  const RowMatX3& x = lattice.positions();
   // Each point writes its own row only: the same bits on any number of threads.
   parallel_for(0, static_cast<long>(tri_.size()), kBlendCost, [&](long p) {
     const std::int32_t* cp = tri_.couple.data() + 4 * p;
@@ -72,6 +82,11 @@ void FoldBlend::apply(const FfdLattice& lattice, double z_min, Eigen::Ref<RowMat
     double w = 0.0;
     for (int k = 0; k < 4; ++k) w += wt[k] * weight_[cp[k]];
     if (!(w > 0.0)) return;
+    if (keep_out_) {
+      const double d = keep_out_->query(out.row(p).transpose()).distance - keep_out_margin_;
+      w *= smoothstep((d - keep_near) / keep_near);
+      if (!(w > 0.0)) return;
+    }
     // The trilinear point: rest plus the interpolated displacement, as FfdLattice::deform.
     const double r = tri_.r(p);
     Eigen::RowVector3d q = tri_.rest.row(p);

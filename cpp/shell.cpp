@@ -494,12 +494,11 @@ void Shell::set_colliders(std::shared_ptr<const Colliders> c, double margin, int
   // Built only with colliders: a scene without any pays nothing.
   ContactSamples s;
   if (c && samples > 0) s = control_ ? surface_contact_samples(samples) : contact_samples(samples);
-  {
-    // The samples ride the spline (contact_samples): a mesh that followed the couples at a fold
-    // would hang in the air over the collider that holds it (a cloth on a 1 cm rod: 22.9 mm
-    // above the rod's top against 9.4 mm), so a sheet with samples keeps the spline's mesh.
+  if (fold_blend_) {
+    // The samples ride the spline (contact_samples): near a collider the mesh keeps the
+    // spline's points (FoldBlend::set_keep_out).
     std::lock_guard<std::mutex> lock(mesh_mutex_);
-    mesh_follows_folds_ = s.vertex.empty();
+    fold_blend_->set_keep_out(s.vertex.empty() ? nullptr : c, margin);
   }
   dynamics_->set_colliders(std::move(c), margin, std::move(s));
 }
@@ -719,7 +718,7 @@ void Shell::vertex_positions(RowMatX3& out) const {
   // never goes through it. Clamped inside deform's pass: a second pass over a strided column
   // cost as much as the deform itself on a million-vertex mesh.
   mesh_deform_->deform_into(*lattice_, vertex_embedding_, z_min, out);
-  if (fold_blend_ && mesh_follows_folds_) fold_blend_->apply(*lattice_, z_min, out);
+  if (fold_blend_) fold_blend_->apply(*lattice_, z_min, out);
 }
 
 void Shell::vertex_positions_into(Eigen::Ref<RowMatX3> out) const {
@@ -733,7 +732,7 @@ void Shell::vertex_positions_into(Eigen::Ref<RowMatX3> out) const {
   PhaseTimer timer(times_, Phase::Mesh);
   const double z_min = params_.has_floor ? params_.floor_z : -std::numeric_limits<double>::infinity();
   mesh_deform_->deform_into(*lattice_, vertex_embedding_, z_min, out);
-  if (fold_blend_ && mesh_follows_folds_) fold_blend_->apply(*lattice_, z_min, out);
+  if (fold_blend_) fold_blend_->apply(*lattice_, z_min, out);
 }
 
 void Shell::mesh_points(const Eigen::Ref<const RowMatXi>& idx, const Eigen::Ref<const RowMatXd>& w,
@@ -775,8 +774,11 @@ void Shell::mesh_points(const Eigen::Ref<const RowMatXi>& idx, const Eigen::Ref<
   std::lock_guard<std::mutex> lock(mesh_mutex_);
   out.resize(n, 3);
   lattice_->deform(lattice_->embed(coords, rest, mesh_interp_), out, z_min);
-  if (fold_blend_ && mesh_follows_folds_)
-    FoldBlend(lattice_->embed(coords, rest, LatticeInterp::Trilinear)).apply(*lattice_, z_min, out);
+  if (fold_blend_) {
+    FoldBlend blend(lattice_->embed(coords, rest, LatticeInterp::Trilinear));
+    blend.set_keep_out(fold_blend_->keep_out(), fold_blend_->keep_out_margin());
+    blend.apply(*lattice_, z_min, out);
+  }
 }
 
 void Shell::hand_over_masses_and_strength() {

@@ -205,8 +205,7 @@ class Shell {
   // The mesh's deformed vertices kept between frames: only those near moving couples are
   // redone (a grid lattice's mesh; vertex_positions is const, the pointer shallow).
   std::unique_ptr<CachedDeform> mesh_deform_;
-  std::unique_ptr<FoldBlend> fold_blend_;  // a flat sheet's mesh where its lattice folds (null: none)
-  bool mesh_follows_folds_ = true;          // false while collider samples ride the spline (mesh_mutex_)
+  std::unique_ptr<FoldBlend> fold_blend_;  // a flat sheet's mesh where its lattice folds (null: none; mesh_mutex_)
   Eigen::VectorXd control_mass_, control_area_, burnt_area_, strength_;
   bool mass_dirty_ = false;
   bool strength_dirty_ = false;

@@ -10,22 +10,9 @@ import argparse
 import numpy as np
 
 import thinburn
+from thinburn._mesh_measures import lattice_turns
 from thinburn.demo import build, default_scene
 from thinburn.scenes import rect_sheet
-
-
-def turns(sim):
-    """Turn (degrees) at each interior couple along each grid line."""
-    x = sim.lattice_positions()
-    m = int(round(np.sqrt(x.size // 6)))
-    c = x.reshape(m, m, 2, 3).mean(2)
-    out = []
-    for axis in (0, 1):
-        d = np.diff(c, axis=axis)
-        a, b = np.take(d, range(0, m - 2), axis=axis), np.take(d, range(1, m - 1), axis=axis)
-        cos = (a * b).sum(-1) / np.maximum(np.linalg.norm(a, axis=-1) * np.linalg.norm(b, axis=-1), 1e-15)
-        out.append(np.degrees(np.arccos(np.clip(cos, -1.0, 1.0))).ravel())
-    return np.concatenate(out)
 
 
 def main():
@@ -43,7 +30,7 @@ def main():
         for k in range(int(round(24 * seconds))):
             sim.step(1 / 24)
             if k % 24 == 23:
-                t = turns(sim)
+                t = lattice_turns(sim)
                 worst, share = max(worst, float(t.max())), max(share, float(np.mean(t > 20.0)))
         print(f"{name:6s} largest turn {worst:.1f} deg over {seconds:g} s; most couples past 20 deg at once: "
               f"{100 * share:.1f} %", flush=True)

@@ -76,3 +76,22 @@ def far_from_fire(rest, faces, char, distance):
         d = np.sqrt(((rest[:, None, :2] - burnt[None, ::7, :2]) ** 2).sum(-1)).min(1)
         ok = (char == 0.0) & (d >= distance)
     return ok[faces].all(1)
+
+
+def lattice_turns(sim):
+    """(M, M): per couple of a flat sheet's grid lattice, the larger turn (degrees) between its
+    couple-to-couple segments along its two grid lines (0 where a line ends at it). FoldBlend
+    (docs/lattice.md, "Where the lattice folds") blends the mesh towards the couples from 20
+    degrees and follows them wholly from 40: a crease on the couple's lines."""
+    x = sim.lattice_positions()
+    m = x.shape[0]
+    c = x.mean(2)
+    out = np.zeros((m, m))
+    for axis in (0, 1):
+        d = np.diff(c, axis=axis)
+        a, b = np.take(d, range(0, m - 2), axis=axis), np.take(d, range(1, m - 1), axis=axis)
+        cos = (a * b).sum(-1) / np.maximum(np.linalg.norm(a, axis=-1) * np.linalg.norm(b, axis=-1), 1e-15)
+        turn = np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))
+        inner = (slice(1, m - 1), slice(None)) if axis == 0 else (slice(None), slice(1, m - 1))
+        out[inner] = np.maximum(out[inner], turn)
+    return out

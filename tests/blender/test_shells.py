@@ -268,6 +268,23 @@ def test_stretch_meter_and_its_warning(addon):
     assert "higher, e.g. 20" in text and "Crumple Amount" not in text
 
 
+def test_a_lattice_that_folds_sharply_is_noted(addon):
+    """An artist's cloth on a 10 cm ball at the default lattice folded through 128 degrees
+    between couples into a four-sided tent, creased on the lattice's lines: the report says so,
+    and names a finer Motion Detail; not below 40 degrees, where the mesh is still the spline's."""
+    meter = addon.stretch.StretchMeter(np.array([[0, 0, 0], [1, 0, 0.0]]), np.array([[0, 1]]))
+    assert meter.turn_frame is None
+    for frame, turn in ((1, 12.0), (2, 128.4), (3, 90.0)):
+        meter.add_turn(turn, frame)
+    assert (meter.turn, meter.turn_frame) == (128.4, 2)
+    text = addon.stretch.crease_note("Cloth", meter.turn, meter.turn_frame, 0, couples=81)
+    assert text.startswith("'Cloth' folded sharply on its motion lattice (up to 128° between "
+                           "neighbouring couples, frame 2)")
+    assert "Motion Detail (now 0: the core's choice) higher, e.g. 18" in text
+    assert addon.stretch.crease_note("Cloth", 39.9, 5, 9) is None
+    assert addon.stretch.crease_note("Cloth", 0.0, None, 9) is None
+
+
 def test_a_squashed_edge_is_called_squashed(addon):
     """An artist's cloth on a ball had an edge shrink to 0.35x its rest length, and the report
     said it "stretched: an edge reached 1.6x": the meter keeps the sign of the worst strain."""
