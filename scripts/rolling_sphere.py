@@ -1,10 +1,11 @@
 """A paper sphere rolling on its table in wind (docs/lattice.md, "Floor"): the demo's sphere
-(r = 10 cm) at 32 cells, floor at z = 0, a 3 m/s wind along x, 4 s. Prints per step size and
-integrator how far its centre travelled, its speed over the last 2 s, and how high its lowest
+(r = 10 cm) at 32 cells, floor at z = 0, a 3 m/s wind along x, 4 s (--seconds). Prints per step
+size and integrator how far its centre travelled, its speed over the second half, how high its lowest
 mesh point rode above the table after the first 0.5 s (median, mean, largest), with the wall
 seconds a simulated second.
 
-    python scripts/rolling_sphere.py [--dts 24 96 240] [--integrators implicit symplectic]
+    python scripts/rolling_sphere.py [--dts 24 96 240] [--integrators implicit symplectic] [--seconds 4]
+                                     [--friction 0.5]
 """
 import argparse
 import time
@@ -15,10 +16,12 @@ import thinburn
 from thinburn.demo import shell_scene
 
 
-def roll(steps_per_second, integrator, seconds=4.0, wind=3.0):
+def roll(steps_per_second, integrator, seconds=4.0, wind=3.0, friction=None):
     sc = shell_scene("sphere")
     sim = thinburn.Simulation(sc.vertices, sc.faces, material="paper", cells=32, floor=0.0,
                               integrator=integrator)
+    if friction is not None:
+        sim.set_dynamics(friction=friction)
     sim.wind = (wind, 0.0, 0.0)
     dt = 1.0 / steps_per_second
     n = int(round(seconds / dt))
@@ -40,11 +43,13 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--dts", type=int, nargs="+", default=[24, 96, 240], help="steps per second")
     ap.add_argument("--integrators", nargs="+", default=["implicit", "symplectic"])
+    ap.add_argument("--seconds", type=float, default=4.0)
+    ap.add_argument("--friction", type=float, default=None, help="the floor's (default: the material's 0.5)")
     a = ap.parse_args()
     for integrator in a.integrators:
         for sps in a.dts:
-            travel, speed, low, wall = roll(sps, integrator)
-            print(f"{integrator:10s} dt = 1/{sps:<4d} travelled {travel:5.2f} m, {speed:4.2f} m/s over the last 2 s; "
+            travel, speed, low, wall = roll(sps, integrator, a.seconds, friction=a.friction)
+            print(f"{integrator:10s} dt = 1/{sps:<4d} travelled {travel:5.3f} m, {speed:4.2f} m/s over the last half; "
                   f"lowest point above the table: median {1000 * np.median(low):5.2f} mm, mean "
                   f"{1000 * low.mean():5.2f}, max {1000 * low.max():5.1f}; {wall:6.2f} s per simulated s", flush=True)
 

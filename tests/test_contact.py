@@ -103,10 +103,26 @@ def test_the_floor_never_pulls_a_rolling_sphere_back():
     could pull; a contact whose floor impulse pulls is let go and the system solved again. The
     paper sphere rolling in a 3 m/s wind (`python scripts/rolling_sphere.py`) went 4.74 m in
     4 s at dt = 1/24 s when held, against 8.28 m under the symplectic integrator, whose
-    projection never pulls; now 7.48 m at 1/24 s (9.7 % short of the symplectic run). The
-    rolling is chaotic: at 1/96 s the distance after 4 s moves with the solver's rounding
-    (7.68 m at commit 4766db8, 7.90 m there at cg_tolerance 1e-10; 7.88 m now, 7.64 m at 1e-10),
-    so the step sizes are compared within that spread: 5.1 % measured, bound 6 %."""
-    coarse, fine, reference = _rolled("implicit", 24), _rolled("implicit", 96), _rolled("symplectic", 24)
-    assert abs(coarse / reference - 1.0) < 0.12
-    assert abs(coarse / fine - 1.0) < 0.06
+    projection never pulls. Now, after 2 s (before backward Euler's rolling turns chaotic: a
+    1e-9 change of the wind changes none of its printed digits, and the symplectic run's by
+    0.3 %), backward Euler at 1/24 s goes 4.092 m and at 1/480 s 4.024 m, against the
+    symplectic run's 3.978 m (3.965-3.979): 2.9 % and 1.2 % apart (3.2 % and 1.5 % at most),
+    bounds 4 % and 2 %.
+    After 4 s the runs are chaotic (a 1e-9 change of the wind moves the 1/96 s run between 6.80
+    and 7.33 m on one machine, 7.64-7.90 m on another), and 1/24 s is compared with the
+    symplectic run only: 7.81 against 8.30 m (5.9 %; 5.6-6.6 % over those changes), bound 9 %."""
+    coarse, fine, reference = (_rolled("implicit", 24, 2.0), _rolled("implicit", 480, 2.0),
+                               _rolled("symplectic", 24, 2.0))
+    assert abs(coarse / reference - 1.0) < 0.04
+    assert abs(fine / reference - 1.0) < 0.02
+    assert abs(_rolled("implicit", 24) / _rolled("symplectic", 24) - 1.0) < 0.09
+
+
+@pytest.mark.xfail(strict=True, reason="docs/dynamics.md §9: the rolling sphere's floor friction depends on the substep")
+def test_a_rolling_sphere_rolls_as_far_at_any_implicit_step():
+    """Known weakness (docs/dynamics.md §9): between 1/24 s and 1/480 s backward Euler's rolling
+    sphere lags: after 2 s it has gone 3.571 m at 1/48 s, 3.109 m at 1/96 s and 3.641 m at
+    1/192 s, against 4.092 m at 1/24 s, 4.024 m at 1/480 s and the symplectic run's 3.978 m
+    (21.8 % short at 1/96 s). Without floor friction every step size goes 4.620-4.621 m. This
+    asserts what should hold, 5 % at 1/96 s, and fails until the friction is mended."""
+    assert abs(_rolled("implicit", 96, 2.0) / _rolled("symplectic", 24, 2.0) - 1.0) < 0.05
