@@ -107,15 +107,13 @@ def test_the_floor_never_pulls_a_rolling_sphere_back():
     1e-9 change of the wind changes none of its printed digits, and the symplectic run's by
     0.3 %), backward Euler at 1/24 s goes 4.092 m and at 1/480 s 4.024 m, against the
     symplectic run's 3.978 m (3.965-3.979): 2.9 % and 1.2 % apart (3.2 % and 1.5 % at most),
-    bounds 4 % and 2 %.
-    After 4 s the runs are chaotic (a 1e-9 change of the wind moves the 1/96 s run between 6.80
-    and 7.33 m on one machine, 7.64-7.90 m on another), and 1/24 s is compared with the
-    symplectic run only: 7.81 against 8.30 m (5.9 %; 5.6-6.6 % over those changes), bound 9 %."""
+    bounds 4 % and 2 %. After 4 s the runs are chaotic (a 1e-9 change of the wind moves the
+    1/96 s run between 6.80 and 7.33 m on one machine, 7.64-7.90 m on another; 1/24 s was 9.7 %
+    short of the symplectic run at an earlier commit, 5.9 % here now), so they are not compared there."""
     coarse, fine, reference = (_rolled("implicit", 24, 2.0), _rolled("implicit", 480, 2.0),
                                _rolled("symplectic", 24, 2.0))
     assert abs(coarse / reference - 1.0) < 0.04
     assert abs(fine / reference - 1.0) < 0.02
-    assert abs(_rolled("implicit", 24) / _rolled("symplectic", 24) - 1.0) < 0.09
 
 
 @pytest.mark.xfail(strict=True, reason="docs/dynamics.md §9: the rolling sphere's floor friction depends on the substep")
