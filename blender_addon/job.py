@@ -537,10 +537,11 @@ class BakeJob:
                 # note once told, still saw A4 paper hover 7.5 mm up (1 mm + the 6.6 mm lattice).
                 self.warnings.append(
                     f"Collision '{name}': its Outer thickness ({1e3 * outer:.0f} mm) keeps the sheet that far "
-                    "off its surface, and the sheet's motion lattice about its thickness more (a quarter "
-                    "of its couples' spacing, at most 1 cm: 6.6 mm on an A4 sheet): for a sheet resting on a table top make the table the "
-                    "Floor Object (the sheet then rests 0.5 mm above it); for one draping over it lower "
-                    "Outer (Physics > Collision > Softbody & Cloth) to about 1 mm")
+                    "off its surface, and the sheet's motion lattice about its thickness more (a "
+                    "quarter of its couples' spacing, at most 1 cm: 6.6 mm on an A4 sheet): for a sheet "
+                    "resting on a table top make the table the Floor Object (the sheet then rests 0.5 mm "
+                    "above it); for one draping over it lower Outer (Physics > Collision > Softbody & "
+                    "Cloth) to about 1 mm")
 
     def _sample_colliders(self) -> list:
         depsgraph = bpy.context.evaluated_depsgraph_get()

@@ -87,6 +87,11 @@ class StretchMeter:
         return float(self.worst_signed[k]), float(self.worst_frame[k])
 
 
+def _motion_detail(lattice: int) -> str:
+    """Motion Detail as the panel shows it."""
+    return "0: the core's choice" if lattice == 0 else f"{lattice}"
+
+
 def stretch_warning(name: str, strain: float, frame, lattice: int, crumple=None, fit=None,
                     couples=None) -> str | None:
     """The report's words for a bake that stretched or squashed an edge by more than WARN_STRAIN
@@ -96,7 +101,7 @@ def stretch_warning(name: str, strain: float, frame, lattice: int, crumple=None,
     couples: how many the lattice had (for a Motion Detail to suggest)."""
     if frame is None or abs(strain) <= WARN_STRAIN:
         return None
-    motion = "0: the core's choice" if lattice == 0 else f"{lattice}"
+    motion = _motion_detail(lattice)
     if strain > 0.0:
         text = (f"'{name}' stretched: an edge reached {1.0 + strain:.1f}× its rest length at frame "
                 f"{frame:.0f} (a sheet hardly stretches), so the motion misbehaved there. ")
@@ -116,7 +121,8 @@ def stretch_warning(name: str, strain: float, frame, lattice: int, crumple=None,
 
 
 # From this turn between neighbouring couples on the mesh follows the couples wholly
-# (FoldBlend::kTo, docs/lattice.md): its folds are creases on the lattice's lines.
+# (FoldBlend::kTo in cpp/fold_blend.hpp, not bound: keep the two equal; docs/lattice.md): its
+# folds are creases on the lattice's lines.
 CREASE_TURN = 40.0
 
 
@@ -136,7 +142,7 @@ def crease_note(name: str, turn: float, frame, lattice: int, couples=None) -> st
     CREASE_TURN."""
     if frame is None or turn < CREASE_TURN:
         return None
-    motion = "0: the core's choice" if lattice == 0 else f"{lattice}"
+    motion = _motion_detail(lattice)
     return (f"'{name}' folded sharply on its motion lattice (up to {turn:.0f}° between neighbouring "
             f"couples, frame {frame:.0f}), so its folds show as creases along the lattice's lines: "
             f"for finer, rounder folds set Motion Detail (now {motion}) higher{finer_detail(lattice, couples)} "

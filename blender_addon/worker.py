@@ -14,7 +14,6 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from thinburn import force_fields as fields
-
 from thinburn._mesh_measures import lattice_turns
 
 from .stretch import ALONG_FROM, chord_strains

@@ -148,3 +148,17 @@ def test_a_floor_object_with_collision_is_the_floor_only(addon, tmp_path):
     _, data = addon.cache.read_pc2(cache_file(tmp_path / "cache", "Sheet.pc2"))
     # Measured: 0.5 mm (the floor's margin) from frame 2 on; 26.2 mm with the cube a collider too.
     assert abs(float(data[-1][:, 2].min()) - 0.0005) < 2e-4
+
+
+def test_a_drape_that_folds_the_lattice_sharply_is_noted(addon, tmp_path):
+    """The bake's worker measures the lattice's largest turn between unburnt couples each frame
+    (worker.CoreWorker.lattice_turn): the 40 cm cloth over the ball at Motion Detail 9 folds its
+    lattice past 40 degrees (the tent's ridges: 129 degrees measured, at frame 12), and the
+    report says its folds show as creases and names Motion Detail 18."""
+    sheet, _ = _scene(tmp_path, frames=24)
+    sheet.thinburn.lattice = 9
+    job = addon.job.BakeJob(bpy.context, sheet)
+    job.run()
+    noted = [w for w in job.warnings if "folded sharply on its motion lattice" in w]
+    assert len(noted) == 1 and "Motion Detail (now 9) higher, e.g. 18" in noted[0], job.warnings
+    assert job.stretch.turn > 40.0
