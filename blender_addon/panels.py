@@ -8,7 +8,7 @@ import bpy
 
 from . import inputs, job, materials, stretch
 from .operators import running_job
-from .properties import DYNAMIC_PARAMS, MATERIAL_FIELDS, MODEL_PARAMS
+from .properties import DYNAMIC_PARAMS, MATERIAL_FIELDS, MODEL_PARAMS, edited_fields
 
 
 class ThinBurnPhysicsPanel:
@@ -38,6 +38,11 @@ class PHYSICS_PT_thinburn(ThinBurnPhysicsPanel, bpy.types.Panel):
         settings = context.object.thinburn
         layout.active = settings.enabled
         layout.prop(settings, "material")
+        own = edited_fields(settings, settings.material)
+        if own:
+            # Fields kept through a change of preset, or set by hand: say so beside the preset.
+            names = ", ".join(MATERIAL_FIELDS[f][0] for f in own)
+            layout.label(text=f"Your own: {names} (Advanced > Reset to Preset)", icon="INFO")
         col = layout.column(align=True)
         col.prop(settings, "cells")
         row = col.row()

@@ -82,16 +82,38 @@ _MATERIAL_ITEMS = [(name, name.replace("_", " ").title(), _describe(name, m), i)
                    for i, (name, m) in enumerate(thinburn.MATERIALS.items())]
 
 
-def load_preset(settings, name: str) -> None:
-    """Copy a Table 1 preset into the sheet's material fields."""
+def _preset_value(preset, field: str) -> float:
+    return getattr(preset, field) / MATERIAL_UNITS.get(field, 1.0)
+
+
+def edited_fields(settings, name: str) -> list:
+    """The material fields whose values differ from preset ``name``'s: the artist's own. The
+    fields are stored as single floats, so a value within a part in a million is the preset's."""
     preset = thinburn.MATERIALS[name]
+    out = []
     for field in MATERIAL_FIELDS:
         if hasattr(preset, field):
-            setattr(settings, "mat_" + field, getattr(preset, field) / MATERIAL_UNITS.get(field, 1.0))
+            want = _preset_value(preset, field)
+            if abs(getattr(settings, "mat_" + field) - want) > 1e-6 * max(abs(want), 1e-12):
+                out.append(field)
+    return out
+
+
+def load_preset(settings, name: str, keep=()) -> None:
+    """Copy a Table 1 preset into the sheet's material fields, all but those in ``keep``."""
+    preset = thinburn.MATERIALS[name]
+    for field in MATERIAL_FIELDS:
+        if hasattr(preset, field) and field not in keep:
+            setattr(settings, "mat_" + field, _preset_value(preset, field))
+    settings.material_loaded = name
 
 
 def _on_material(self, context):
-    load_preset(self, self.material)
+    # A field the artist changed from the last preset's value (a Spread Speed set for the shot)
+    # is kept when another preset is chosen; the panel lists those, and Reset to Preset loads
+    # them all. Loaded over, a speed set before the preset was silently lost.
+    loaded = self.material_loaded if self.material_loaded in thinburn.MATERIALS else "paper"
+    load_preset(self, self.material, keep=edited_fields(self, loaded))
 
 
 def build_material(settings):
@@ -160,6 +182,10 @@ class ThinBurnSettings(bpy.types.PropertyGroup):
         description="What the sheet burns and moves like: a preset of Table 1 of Liu et al. 2009 "
                     "(the paper's 'material'); choosing one loads its values into Advanced > "
                     "Burns Like")
+    material_loaded: StringProperty(
+        name="Preset Loaded", default="paper", options={"HIDDEN"},
+        description="The Burns Like preset whose values the material fields were last loaded "
+                    "from: a field that differs from it is the artist's own and is kept")
     cells: IntProperty(
         name="Fire Detail", default=128, min=8, max=1024, soft_max=512, options=STATIC,
         description="How finely the fire spreads: a flat sheet is divided into this many fire "

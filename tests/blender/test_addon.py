@@ -56,6 +56,32 @@ def test_material_preset_fills_the_fields_and_reaches_the_core(addon):
     assert built.flexural_rigidity == pytest.approx(6e-5, rel=1e-6)
 
 
+def test_a_new_preset_keeps_the_fields_the_artist_set(addon):
+    """A Spread Speed set for the shot survives a change of Burns Like; the other fields take
+    the new preset's values, the panel names the kept one, and Reset to Preset loads it too."""
+    import bpy
+    import thinburn
+    obj = make_sheet()
+    s = obj.thinburn
+    s.mat_V0 = 25.0  # paper's is 3.5 mm/s
+    assert addon.properties.edited_fields(s, "paper") == ["V0"]
+    s.material = "cloth"
+    cloth = thinburn.MATERIALS["cloth"]
+    assert s.mat_V0 == pytest.approx(25.0)
+    assert s.mat_burn_duration == pytest.approx(cloth.burn_duration)
+    assert s.mat_mass == pytest.approx(cloth.mass / addon.properties.MATERIAL_UNITS.get("mass", 1.0))
+    assert addon.properties.edited_fields(s, "cloth") == ["V0"]
+    drawn = []
+    addon.panels.PHYSICS_PT_thinburn.draw(type("P", (), {"layout": _Layout(drawn)})(), _Context(obj))
+    assert "label: Your own: Spread Speed (Advanced > Reset to Preset)" in drawn
+    s.material = "silk"  # still the artist's, through a second change
+    assert s.mat_V0 == pytest.approx(25.0)
+    with bpy.context.temp_override(object=obj, active_object=obj):
+        bpy.ops.thinburn.load_preset()
+    assert s.mat_V0 == pytest.approx(thinburn.MATERIALS["silk"].V0)
+    assert addon.properties.edited_fields(s, "silk") == []
+
+
 def test_model_parameter_defaults_match_the_core(addon):
     import thinburn
     verts = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]], dtype=float)
