@@ -112,8 +112,15 @@ def _on_material(self, context):
     # A field the artist changed from the last preset's value (a Spread Speed set for the shot)
     # is kept when another preset is chosen; the panel lists those, and Reset to Preset loads
     # them all. Loaded over, a speed set before the preset was silently lost.
-    loaded = self.material_loaded if self.material_loaded in thinburn.MATERIALS else "paper"
-    load_preset(self, self.material, keep=edited_fields(self, loaded))
+    load_preset(self, self.material, keep=edited_fields(self, _loaded_preset(self)))
+
+
+def _loaded_preset(settings) -> str:
+    """The preset the material fields were last loaded from. A sheet from a file saved before
+    that was kept: the preset its fields match best (a new sheet's are paper's)."""
+    if settings.material_loaded in thinburn.MATERIALS:
+        return settings.material_loaded
+    return min(thinburn.MATERIALS, key=lambda name: len(edited_fields(settings, name)))
 
 
 def build_material(settings):
@@ -183,7 +190,7 @@ class ThinBurnSettings(bpy.types.PropertyGroup):
                     "(the paper's 'material'); choosing one loads its values into Advanced > "
                     "Burns Like")
     material_loaded: StringProperty(
-        name="Preset Loaded", default="paper", options={"HIDDEN"},
+        name="Preset Loaded", default="", options={"HIDDEN"},
         description="The Burns Like preset whose values the material fields were last loaded "
                     "from: a field that differs from it is the artist's own and is kept")
     cells: IntProperty(

@@ -80,6 +80,12 @@ def test_a_new_preset_keeps_the_fields_the_artist_set(addon):
         bpy.ops.thinburn.load_preset()
     assert s.mat_V0 == pytest.approx(thinburn.MATERIALS["silk"].V0)
     assert addon.properties.edited_fields(s, "silk") == []
+    # A sheet from a file saved before the loaded preset was kept: its fields match cloth's.
+    old = make_sheet()
+    addon.properties.load_preset(old.thinburn, "cloth")
+    old.thinburn.material_loaded = ""
+    old.thinburn.material = "silk"
+    assert addon.properties.edited_fields(old.thinburn, "silk") == []
 
 
 def test_model_parameter_defaults_match_the_core(addon):
