@@ -6,9 +6,13 @@ it has settled (37 to 48), the substeps each took, how many were redone and the 
 vertices; then, run again with the substeps fixed at each of --substeps from frame 37, the largest
 lattice strain (step_stats' max_strain) over frames 37 to 42.
 
-    python scripts/collider_rest.py [--substeps 3 6 8 12 16 24]
+    python scripts/collider_rest.py [--substeps 3 6 8 12 16 24] [--time 72]
+
+--time N: only the wall time of frames 1 to N at the defaults (2 threads), how the WIP branch
+of docs/dynamics.md §9 was compared with main.
 """
 import argparse
+import time
 
 import numpy as np
 
@@ -18,13 +22,13 @@ from thinburn.scenes import rect_sheet
 SETTLE = 36
 
 
-def drape():
+def drape(frames=SETTLE):
     n = 61
     v, f = rect_sheet(0.4, 0.4, nx=n, ny=n, z=0.22)
     v[:, :2] -= v[:, :2].mean(0)
     sim = thinburn.Simulation(v, f, material="cloth", cells=48, floor=0.0, lattice=16, threads=2)
     sim.set_colliders(spheres=[dict(centre=(0, 0, 0.1), radius=0.1, friction=0.5, thickness=0.001)])
-    for _ in range(SETTLE):
+    for _ in range(frames):
         sim.step(1 / 24)
     return sim
 
@@ -32,7 +36,13 @@ def drape():
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--substeps", type=int, nargs="+", default=[3, 6, 8, 12, 16, 24])
+    ap.add_argument("--time", type=int, default=0, metavar="N", help="only time frames 1 to N")
     a = ap.parse_args()
+    if a.time:
+        t0 = time.perf_counter()
+        drape(a.time)
+        print(f"frames 1-{a.time}: {time.perf_counter() - t0:.1f} s")
+        return
     sim = drape()
     subs, redone, awake, strain = [], 0, [], []
     for _ in range(12):
