@@ -215,8 +215,11 @@ def lantern(args):
     on the +x side (the camera looks at that side)."""
     desk = H.make_box_table(top=0.0, size=1.2)
     desk.data.materials.append(_material("Table", (0.12, 0.08, 0.05)))
+    import bpy
     sheet = H.make_lantern(radius=0.1, depth=0.3, segments=64, cuts=23)
     sheet.data.materials.append(_material("Paper", (0.85, 0.83, 0.78)))
+    bpy.context.view_layer.objects.active = sheet
+    bpy.ops.object.shade_smooth()  # as an artist would: flat, its 64 faces showed as vertical bands
     s = H.setup_bake(sheet, frames=args.frames, cells=args.cells, cache_dir=args.cache, floor=False)
     s.threads, s.material, s.mat_V0 = 0, "paper", args.v0
     s.flame_intensity, s.flame_temperature = 2.0, 1700.0
