@@ -27,13 +27,14 @@ from .inputs import BakeError
 enabled_sheets = operators.enabled_sheets  # the scene's meshes with ThinBurn enabled, by name
 
 
-def bake_object(obj, stream=sys.stderr, interval: float = 1.0) -> str:
+def bake_object(obj, stream=sys.stderr, interval: float = 1.0, keep_saved: bool = True) -> str:
     """Bake one sheet as the Bake operator does from a script; returns the bake's message
     (and a line for each thing the bake ignored).
 
     Raises BakeError with the text the operator would report; the previous bake stays.
+    ``keep_saved`` False writes over the cache the saved .blend plays (inputs.cache_path).
     """
-    job = operators.bake_now(bpy.context, obj, stream=stream, interval=interval)
+    job = operators.bake_now(bpy.context, obj, stream=stream, interval=interval, keep_saved=keep_saved)
     return "\n".join([job.message, *(f"ThinBurn: warning: {w}" for w in job.warnings)])
 
 
@@ -60,7 +61,9 @@ def bake_file(filepath=None, objects=None, save: bool = True, usd=None, stream=s
                 raise BakeError(f"'{name}' is not in the scene '{scene.name}'")
             stream.write(f"ThinBurn: baking '{name}' frames {obj.thinburn.frame_start}–"
                          f"{obj.thinburn.frame_end}\n")
-            stream.write(bake_object(obj, stream, interval) + "\n")
+            # A bake that saves the .blend at once writes over its cache: a farm's file
+            # names stay as they are, and the saved file never plays a bake it did not make.
+            stream.write(bake_object(obj, stream, interval, keep_saved=not save) + "\n")
             baked.append(name)
         except BakeError as exc:
             stream.write(f"ThinBurn: error: '{name}': {exc}\n")

@@ -365,9 +365,31 @@ def blend_stem() -> str:
     return bpy.path.clean_name(os.path.splitext(os.path.basename(bpy.data.filepath))[0])
 
 
-def cache_path(obj, settings) -> tuple:
+def saved_file_plays(path: str) -> bool:
+    """Whether the .blend saved on disk may play the cache file ``path``: the file exists and
+    was written before the .blend's last save (a bake since then is the open file's alone).
+    A copy Save As made keeps its bake's time, so it counts as the saved file's."""
+    blend = bpy.data.filepath
+    if not blend or not os.path.exists(blend) or not os.path.exists(path):
+        return False
+    return os.path.getmtime(path) <= os.path.getmtime(blend)
+
+
+def _cache_names(stem: str):
+    """``<stem>.pc2``, then ``<stem>.2.pc2``, ``<stem>.3.pc2``, …: the names a sheet's bake may
+    take (clean object names have no '.', so no sheet's name is another's version)."""
+    yield stem + ".pc2"
+    for k in range(2, 10000):
+        yield f"{stem}.{k}.pc2"
+
+
+def cache_path(obj, settings, keep_saved: bool = True) -> tuple:
     """(path for the modifier as the artist wrote it, absolute path) of the sheet's PC2 file:
-    ``<Cache Folder>/<blend name>/<object name>.pc2``."""
+    ``<Cache Folder>/<blend name>/<object name>.pc2``. A re-bake never writes over the cache
+    the saved .blend plays (a file written before its last save): it takes the next free
+    ``<object name>.<k>.pc2``, and saving the file deletes the one it no longer plays
+    (saving.drop_superseded). Re-baking an unsaved change writes over the last bake, and so
+    does every bake with ``keep_saved`` False (a headless bake that saves the .blend at once)."""
     raw = settings.cache_dir.strip()
     if not raw:
         raise BakeError("the Cache Folder is empty: choose a folder for the bake "
@@ -375,7 +397,6 @@ def cache_path(obj, settings) -> tuple:
     if raw.startswith("//") and not bpy.data.filepath:
         raise BakeError(f"the cache folder '{raw}' is relative to the .blend file, which is not "
                         "saved yet: save the file or choose an absolute folder")
-    name = bpy.path.clean_name(obj.name) + ".pc2"
     stem = blend_stem()
     folder = os.path.join(bpy.path.abspath(raw), stem)
     try:
@@ -386,6 +407,8 @@ def cache_path(obj, settings) -> tuple:
     if not os.access(folder, os.W_OK):
         raise BakeError(f"the cache folder '{folder}' is not writable: choose another Cache "
                         "Folder (Physics > ThinBurn > Cache)")
+    name = next(n for n in _cache_names(bpy.path.clean_name(obj.name))
+                if not (keep_saved and saved_file_plays(os.path.join(folder, n))))
     shown = raw if raw.endswith(("/", "\\")) else raw + "/"
     return f"{shown}{stem}/{name}", os.path.join(folder, name)
 

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import inspect
 import math
+import os
 import queue
 import time as _time
 
@@ -85,6 +86,18 @@ def check_floor(obj, world, floor, settings):
         raise BakeError(f"'{obj.name}' starts below its floor: its lowest point is at "
                         f"{low * 1000:.1f} mm, the floor ({where}) at {floor * 1000:.1f} mm. Move the "
                         "sheet up, or lower the floor (Floor Height, or the Floor object)")
+
+
+def kept_bakes(sheets, objs) -> list:
+    """The files of the sheets' last bakes that the saved .blend plays and this bake did not
+    write over (inputs.cache_path wrote beside them), by name."""
+    kept = []
+    for sheet, obj in zip(sheets, objs):
+        old = obj.thinburn.baked_file
+        path = bpy.path.abspath(old) if old else ""
+        if path and os.path.normpath(path) != os.path.normpath(sheet.abs_path) and inputs.saved_file_plays(path):
+            kept.append(os.path.basename(path))
+    return kept
 
 
 def describe_shape(shape: dict) -> str:
@@ -207,7 +220,7 @@ class BakeJob:
     With Heat Ignites, the sheets within heat's reach of it (inputs.heat_group) bake with it as
     one simulation, each into its own cache."""
 
-    def __init__(self, context, obj):
+    def __init__(self, context, obj, keep_saved: bool = True):
         self.obj_name = obj.name
         self.scene = context.scene
         settings = obj.thinburn
@@ -247,7 +260,7 @@ class BakeJob:
             self.floor = kwargs.get("floor")  # where the ash flakes land, too
             check_floor(obj, world, self.floor, settings)
             for (name, first, count, mw), member in zip(parts, objs):
-                paths = inputs.cache_path(member, member.thinburn)
+                paths = inputs.cache_path(member, member.thinburn, keep_saved)
                 self.sheets.append(SheetCache(name, *paths, first, first + count, mw,
                                               member.thinburn.cache_step, float(self.frames[0])))
         except OSError as exc:
@@ -658,6 +671,7 @@ class BakeJob:
         start = float(self.frames[0])
         ignite = cache.seconds_to_frames(ignite_s, start, self.fps)
         burnout = cache.seconds_to_frames(burnout_s, start, self.fps)
+        kept = kept_bakes(self.sheets, objs)
         for k, (sheet, obj) in enumerate(zip(self.sheets, objs)):
             self._apply(obj, sheet, start, ignite[sheet.start:sheet.stop],
                         burnout[sheet.start:sheet.stop], self._particles_of(k))
@@ -670,6 +684,10 @@ class BakeJob:
             self.message += "; " + describe_shape(self.shape)
         if ignited == 0:
             self.message += " (no lit igniter touched the sheet)"
+        if kept:
+            self.message += (f"; the saved '{os.path.basename(bpy.data.filepath)}' still plays "
+                             f"{', '.join(kept)} until you save it (this bake: "
+                             f"{', '.join(os.path.basename(s.abs_path) for s in self.sheets)})")
         if self.stretch is not None:
             signed, at = self.stretch.largest_signed(burnout)
             worst = abs(signed)

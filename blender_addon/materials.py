@@ -434,7 +434,7 @@ def owns_cache(settings) -> bool:
     return bool(made_in) and not os.path.exists(made_in)
 
 
-def _delete_files(paths, gone) -> None:
+def remove_files(paths, gone) -> None:
     for path in sorted(paths):
         for p in (path, path + ".partial"):
             if os.path.exists(p):
@@ -530,7 +530,7 @@ def free_bake(obj) -> list:
         if "fire particles" not in gone:
             gone.append("fire particles")
     gone += mantaflow.free(obj, delete_files=not recorded or owns_cache(settings))
-    _delete_files(paths, gone)
+    remove_files(paths, gone)
     settings.baked_file = ""
     settings.baked_shape = ""
     settings.baked_strain = 0.0

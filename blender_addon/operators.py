@@ -41,16 +41,18 @@ def _draw_status(self, context):
                                   f"ETA {job.eta_text()}  (Esc cancels)")
 
 
-def bake_now(context, obj, stream=None, interval: float = 1.0, on_frame=None) -> BakeJob:
+def bake_now(context, obj, stream=None, interval: float = 1.0, on_frame=None,
+             keep_saved: bool = True) -> BakeJob:
     """Bake ``obj`` to the end before returning (scripts, background mode, Quick Burn, Bake
     All, headless). With ``stream``, a progress line about every ``interval`` seconds (and one
     at the end); ``on_frame(job)`` after each frame. Raises BakeError with the artist's text;
-    a failed or interrupted bake leaves the previous one as it was."""
+    a failed or interrupted bake leaves the previous one as it was. ``keep_saved`` False
+    writes over the cache the saved .blend plays (inputs.cache_path)."""
     scene = context.scene
     if running_job(scene) is not None:
         raise BakeError("another ThinBurn bake is running in this scene: wait for it to finish, "
                         "or press Esc to cancel it")
-    job = BakeJob(context, obj)
+    job = BakeJob(context, obj, keep_saved)
     lines = ProgressLines(job.obj_name, stream, interval) if stream is not None else None
 
     def progress(j):

@@ -2,6 +2,10 @@
 file's folder (``<Cache Folder>/<new blend name>/``) and its modifiers and record point there,
 so the two files never share a cache (Free in one never touches the other's).
 
+A re-bake of a saved file writes beside the cache that file plays (inputs.cache_path), and
+``save_post`` deletes what the saved file no longer plays (drop_superseded): until the artist
+saves, the file on disk still plays its own bake.
+
 ``save_pre`` copies and re-points; Blender then rebases the modifiers' relative paths to the
 new file's folder (its *Remap Relative*, on by default), which is why a modifier's path is
 written relative to the old file's folder here. ``save_post`` sets the paths as the new
@@ -14,6 +18,8 @@ import os
 import shutil
 
 import bpy
+
+from . import materials
 
 _pending = []  # (saved-to path, [(setter, old value, new value)]) from save_pre to save_post
 
@@ -92,9 +98,28 @@ def copy_caches_on_save_as(filepath, *_):
     _pending.append((filepath, changes))
 
 
+def drop_superseded(obj, settings) -> list:
+    """The sheet's recorded files that none of its cache modifiers plays any more (a bake the
+    re-bake beside it replaced, inputs.cache_path): deleted once the .blend that baked them is
+    saved, since the file on disk then plays the new bake. Returns what went."""
+    if not materials.owns_cache(settings):
+        return []
+    played = {bpy.path.abspath(md.filepath) for md in _cache_modifiers(obj, settings) if md.filepath}
+    if not played:  # no modifier to go by (an artist's own setup): keep everything
+        return []
+    stale = [item.path for item in settings.baked_files if bpy.path.abspath(item.path) not in played]
+    gone = []
+    materials.remove_files({bpy.path.abspath(p) for p in stale}, gone)
+    for path in stale:
+        index = next(i for i, item in enumerate(settings.baked_files) if item.path == path)
+        settings.baked_files.remove(index)
+    return gone
+
+
 @bpy.app.handlers.persistent
 def settle_paths_after_save(filepath, *_):
-    """save_post: the open file's paths as its folder sees them; after Save Copy, as before."""
+    """save_post: the open file's paths as its folder sees them; after Save Copy, as before.
+    A save of the open file itself then deletes the bakes it no longer plays."""
     while _pending:
         saved_to, changes = _pending.pop()
         copy = os.path.realpath(bpy.data.filepath) != os.path.realpath(saved_to)
@@ -103,6 +128,9 @@ def settle_paths_after_save(filepath, *_):
                 setattr(target, attr, old_value if copy else as_new)
             except ReferenceError:  # removed meanwhile
                 pass
+    if filepath and bpy.data.filepath and os.path.realpath(filepath) == os.path.realpath(bpy.data.filepath):
+        for obj, settings in list(_sheets()):
+            drop_superseded(obj, settings)
 
 
 def register():

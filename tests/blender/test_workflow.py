@@ -272,6 +272,52 @@ def test_free_after_a_rename_removes_every_file_and_object_the_bakes_made(addon,
     assert not sheet.modifiers and len(sheet.thinburn.baked_files) == 0
 
 
+def test_a_rebake_keeps_the_cache_the_saved_file_plays_until_the_file_is_saved(addon, tmp_path, capfd):
+    # Re-baking a saved file wrote over the cache that file plays: reopening it without saving
+    # (or after a crash) played the new bake's motion under the old bake's char and fire.
+    blend = tmp_path / "shot.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(blend))
+    sheet = _baked_sheet()
+    cache = tmp_path / "thinburn_cache"
+    bpy.ops.wm.save_mainfile()
+    made = _files(cache)
+    assert "shot/Sheet.pc2" in made
+    first = (cache / "shot" / "Sheet.pc2").read_bytes()
+    ignite = point_attribute(sheet, "thinburn_ignite_time").copy()
+    bpy.data.objects["Igniter"].location = (0.1, 0.1, 0.5)  # another bake
+    capfd.readouterr()
+    assert bpy.ops.thinburn.bake() == {"FINISHED"}
+    assert ("the saved 'shot.blend' still plays Sheet.pc2 until you save it (this bake: Sheet.2.pc2)"
+            in capfd.readouterr().out)
+    assert sheet.modifiers["ThinBurn Cache"].filepath == "//thinburn_cache/shot/Sheet.2.pc2"
+    assert not np.array_equal(point_attribute(sheet, "thinburn_ignite_time"), ignite)
+    assert (cache / "shot" / "Sheet.pc2").read_bytes() == first
+    # Baked again before a save: the unsaved bake is written over, not kept beside.
+    assert bpy.ops.thinburn.bake() == {"FINISHED"}
+    versions = [f.replace("Sheet", "Sheet.2") for f in made]
+    assert _files(cache) == sorted(made + versions)
+    # The saved file, reopened, plays its own bake: the first cache under the first char.
+    bpy.ops.wm.open_mainfile(filepath=str(blend))
+    sheet = bpy.data.objects["Sheet"]
+    np.testing.assert_array_equal(point_attribute(sheet, "thinburn_ignite_time"), ignite)
+    _, data = addon.cache.read_pc2(cache / "shot" / "Sheet.pc2")
+    np.testing.assert_allclose(evaluated_positions(sheet, 6), data[5], atol=1e-6)
+    # Re-baked and saved: the file plays the new bake, and the one it replaced is deleted.
+    bpy.data.objects["Igniter"].location = (0.1, 0.1, 0.5)
+    bpy.context.view_layer.objects.active = sheet
+    assert bpy.ops.thinburn.bake() == {"FINISHED"}
+    assert _files(cache) == sorted(made + versions)
+    bpy.ops.wm.save_mainfile()
+    assert _files(cache) == versions
+    assert sorted(item.path for item in sheet.thinburn.baked_files) == [
+        "//thinburn_cache/" + f for f in versions]
+    # The next re-bake of the saved file takes the freed name.
+    assert bpy.ops.thinburn.bake() == {"FINISHED"}
+    assert sheet.modifiers["ThinBurn Cache"].filepath == "//thinburn_cache/shot/Sheet.pc2"
+    assert bpy.ops.thinburn.free_bake() == {"FINISHED"}
+    assert _files(cache) == []
+
+
 # --- warnings for what the bake ignores --------------------------------------------------------
 def test_the_bake_report_warns_of_fields_it_ignores_not_of_a_moving_sheet_or_wind_noise(
         addon, tmp_path, capfd):
