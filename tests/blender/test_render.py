@@ -152,6 +152,35 @@ def test_flames_light_the_sheet(addon, tmp_path):
     assert sheet.hide_render is False
 
 
+def test_no_flame_light_sphere_cuts_the_sheet(addon, tmp_path):
+    # Spheres of the full flame Radius at the particles on the paper cut through it, and each
+    # cut lit a bright hollow ring on the paper: a chain of rings along the burning front, seen
+    # from above (docs/images/blender_fire_080.png before). A sphere is clear of the sheet when
+    # its centre is farther from the sheet's surface than its radius.
+    from mathutils import Vector
+    from mathutils.bvhtree import BVHTree
+    sheet = _fire_scene(tmp_path)
+    bpy.context.scene.frame_set(30)
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    paper = sheet.evaluated_get(depsgraph)
+    tree = BVHTree.FromObject(paper, depsgraph)
+    light = bpy.data.objects["ThinBurn Fire Light Sheet"].evaluated_get(depsgraph)
+    mesh = light.to_mesh()
+    verts = np.array([light.matrix_world @ v.co for v in mesh.vertices])
+    light.to_mesh_clear()
+    # Icospheres of one subdivision: 12 vertices each, in order.
+    centres = verts.reshape(-1, 12, 3).mean(axis=1)
+    radius = np.linalg.norm(verts.reshape(-1, 12, 3)[:, 0] - centres, axis=1)
+    inv = paper.matrix_world.inverted()
+    gap = np.array([tree.find_nearest(inv @ Vector(c))[3] for c in centres])
+    # measured: 1413 spheres of 2 mm, the closest centre 9.94 mm from the paper (the lift is
+    # 10 mm); before, spheres of 10 mm at the particles themselves
+    print("flame light spheres", len(centres), "radius", radius.max(), "closest centre", gap.min())
+    assert len(centres) > 50
+    np.testing.assert_allclose(radius, addon.fire.LIGHT_SIZE * addon.fire.FLAME_RADIUS, rtol=1e-3)
+    assert (gap > radius).all(), (gap.min(), radius.max())
+
+
 def test_eevee_lamps_light_the_sheet_near_the_fire_and_cycles_ignores_them(addon, tmp_path):
     sheet = _fire_scene(tmp_path)
     scene = bpy.context.scene
