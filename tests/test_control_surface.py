@@ -236,3 +236,45 @@ def test_shape_operators_have_the_shells_curvatures(shell):
     else:
         assert np.abs(k * 0.1 - 1).max() < 0.15
         assert np.abs(np.median(k, axis=0) * 0.1 - 1).max() < 0.05
+
+
+def _letter_stack(n=33, size=0.2, gap=0.004, shift=0.01, z=0.0005):
+    """The Blender walkthrough's stack (tests/blender/blender_helpers.make_stack): three flat
+    sheets 4 mm apart in one mesh, each shifted 1 cm in x and y from the one below."""
+    xs = np.linspace(-size / 2, size / 2, n)
+    verts, faces = [], []
+    for k in range(3):
+        base = len(verts)
+        verts += [(x + k * shift, y + k * shift, z + k * gap) for y in xs for x in xs]
+        for j in range(n - 1):
+            for i in range(n - 1):
+                a, b, c, d = base + j * n + i, base + j * n + i + 1, base + (j + 1) * n + i + 1, base + (j + 1) * n + i
+                faces += [(a, b, c), (a, c, d)]
+    return np.array(verts), np.array(faces)
+
+
+@pytest.mark.xfail(strict=True, reason="docs/blender.md, the letters walkthrough: a control surface's "
+                                       "corner couples fold shut about an untied pair")
+def test_a_lit_corner_of_a_coarse_stack_does_not_fold_shut():
+    # The walkthrough's letters (Quick Burn at the bottom letter's corner, Motion Detail 9,
+    # Spread Speed 25 mm/s, Fire Detail 64): the corner couple and the next along the edge,
+    # 62.5 mm apart, have no spring between them, and the crumple folds them together about the
+    # couple both are tied to. Measured: the bottom letter's first row of edges at 0.06x their
+    # rest length at frame 110 (0.85x at 60); the other letters' within 0.993-1.002x.
+    from thinburn import scenefile, wedge
+    v, f = _letter_stack()
+    # As Blender holds them (float32). In float64 the lattice's couples land elsewhere along the
+    # grid's ties and this corner holds (0.983x): which layout a regular grid gets depends on
+    # rounding at 4e-9 m.
+    v = v.astype(np.float32).astype(np.float64)
+    corner = [-0.1, -0.1, 0.0005]
+    spec = scenefile.SceneSpec(v, f, material={"preset": "paper", "V0": 25.0}, name="Letters",
+                               igniters=[dict(point=corner, time=k / 24, radius=0.02) for k in range(24)])
+    spec.cells, spec.lattice, spec.floor, spec.frames = 64, 9, 0.0005, 110
+    sim, _, fps, frames = wedge.simulation_for(spec, {})
+    wedge.run_frames(sim, spec, fps, frames, lambda k, s: None)
+    x = np.asarray(sim.vertex_positions())
+    row = np.arange(0, 9)  # the bottom letter's edge y = -0.1, x from -0.1 to -0.05
+    ratio = np.linalg.norm(x[row + 1] - x[row], axis=1) / np.linalg.norm(v[row + 1] - v[row], axis=1)
+    print("the lit corner's first row of edges, length / rest:", np.round(ratio, 3))
+    assert ratio.min() > 0.9, ratio
