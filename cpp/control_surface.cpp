@@ -63,6 +63,30 @@ ControlSurface::ControlSurface(const SurfVerts& vertices, const SurfFaces& faces
   build_topology();
 }
 
+void ControlSurface::tie_loose_couples(std::map<std::pair<int, int>, std::vector<int>>& edges) const {
+  // A couple tied to one other only (a sheet's corner whose region touches the region inside it
+  // and no other: it happens on a regular grid as rounding breaks the sampling's ties) turns
+  // freely about that one: the crumple folded a letter's lit corner shut onto the next couple
+  // along its edge, its paper to 0.08x. It is tied to the two nearest of its neighbour's
+  // neighbours as well (the same piece), which makes it the corner of two triangles.
+  const int C = coarse_->size();
+  std::vector<std::vector<int>> nbr(C);
+  for (const auto& [e, opp] : edges) {
+    nbr[e.first].push_back(e.second);
+    nbr[e.second].push_back(e.first);
+  }
+  const auto& pos = coarse_->positions();
+  for (int c = 0; c < C; ++c) {
+    if (nbr[c].size() != 1) continue;
+    std::vector<std::pair<double, int>> near;
+    for (int o : nbr[nbr[c][0]])
+      if (o != c) near.push_back({(pos[o] - pos[c]).squaredNorm(), o});
+    std::sort(near.begin(), near.end());
+    for (std::size_t k = 0; k < near.size() && k < 2; ++k)
+      edges.try_emplace({std::min(c, near[k].second), std::max(c, near[k].second)});
+  }
+}
+
 void ControlSurface::build_topology() {
   // Edges of the control surface's triangles, each once, ascending; and per edge the corners
   // opposite it (two on an interior edge: a flex spring between them).
@@ -80,6 +104,7 @@ void ControlSurface::build_topology() {
   for (int c = 0; c < C; ++c)
     for (int q = off[c]; q < off[c + 1]; ++q)
       if (idx[q] != c) edges.try_emplace({std::min(c, idx[q]), std::max(c, idx[q])});
+  tie_loose_couples(edges);
   std::vector<std::pair<int, int>> flex;
   for (const auto& [e, opp] : edges)
     if (opp.size() == 2 && opp[0] != opp[1]) flex.push_back({std::min(opp[0], opp[1]), std::max(opp[0], opp[1])});

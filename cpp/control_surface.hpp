@@ -26,7 +26,9 @@
 
 #include <cstdint>
 #include <limits>
+#include <map>
 #include <memory>
+#include <utility>
 #include <vector>
 
 #include "lattice.hpp"
@@ -89,6 +91,7 @@ class ControlSurface {
 
  private:
   void build_topology();
+  void tie_loose_couples(std::map<std::pair<int, int>, std::vector<int>>& edges) const;
   void gather(int start, std::vector<int>& out, std::vector<int>& stamp, int& id) const;
   void keep_side(int side, std::vector<int>& cand) const;
 

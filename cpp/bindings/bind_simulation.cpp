@@ -208,6 +208,9 @@ void define_simulation(py::module_& m) {
       .def_property_readonly("bending_share", &S::bending_share)
       .def("lattice_positions", &S::lattice_positions)
       .def("lattice_rest_positions", [](const S& s) { return s.lattice() ? s.lattice()->rest() : RowMatX3(0, 3); })
+      .def("lattice_springs", [](const S& s) {
+        return s.dynamics() ? s.dynamics()->spring_pairs() : Eigen::Matrix<int, Eigen::Dynamic, 2, Eigen::RowMajor>(0, 2);
+      })
       .def("control_masses", &S::control_masses)
       .def("control_strength", [](const S& s) { return s.dynamics() ? s.dynamics()->strength() : Eigen::VectorXd(); })
       .def("lattice_awake", [](const S& s) {

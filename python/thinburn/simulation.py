@@ -501,6 +501,13 @@ class Simulation:
         """(M, M, 2, 3) control vertices at rest; (couples, 2, 3) on a surface."""
         return self._couples(self._sim.lattice_rest_positions, "lattice_rest_positions", 2, 3)
 
+    def lattice_springs(self) -> np.ndarray:
+        """(s, 2) the lattice's springs as pairs of control vertices, each numbered
+        2 * couple + layer (0 bottom, 1 top) in the couples' order of lattice_positions (row by
+        row on the grid): what ties which couples, to check a lattice's topology."""
+        self._require_shell("lattice_springs")
+        return np.asarray(self._sim.lattice_springs())
+
     def heat(self) -> np.ndarray:
         """(M, M, 2) heat accumulated at the control vertices (eq 2); (couples, 2) on a surface."""
         return self._couples(self._sim.heat, "heat", 2)
