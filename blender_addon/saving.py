@@ -107,11 +107,10 @@ def drop_superseded(obj, settings) -> list:
     played = {bpy.path.abspath(md.filepath) for md in _cache_modifiers(obj, settings) if md.filepath}
     if not played:  # no modifier to go by (an artist's own setup): keep everything
         return []
-    stale = [item.path for item in settings.baked_files if bpy.path.abspath(item.path) not in played]
+    stale = [i for i, item in enumerate(settings.baked_files) if bpy.path.abspath(item.path) not in played]
     gone = []
-    materials.remove_files({bpy.path.abspath(p) for p in stale}, gone)
-    for path in stale:
-        index = next(i for i, item in enumerate(settings.baked_files) if item.path == path)
+    materials.remove_files({bpy.path.abspath(settings.baked_files[i].path) for i in stale}, gone)
+    for index in reversed(stale):  # from the end, so the indices before it stay put
         settings.baked_files.remove(index)
     return gone
 

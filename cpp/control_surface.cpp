@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "threads.hpp"
 
@@ -31,6 +32,16 @@ double wendland(double q) {
 
 Eigen::Vector3d mid(const RowMatX3& x, int c) { return 0.5 * (x.row(2 * c) + x.row(2 * c + 1)).transpose(); }
 Eigen::Vector3d axis(const RowMatX3& x, int c) { return (x.row(2 * c + 1) - x.row(2 * c)).transpose(); }
+
+// Per couple, the couples an edge joins it to.
+std::vector<std::vector<int>> neighbour_lists(const std::map<std::pair<int, int>, std::vector<int>>& edges, int C) {
+  std::vector<std::vector<int>> nbr(C);
+  for (const auto& [e, opp] : edges) {
+    nbr[e.first].push_back(e.second);
+    nbr[e.second].push_back(e.first);
+  }
+  return nbr;
+}
 
 }  // namespace
 
@@ -69,12 +80,8 @@ void ControlSurface::tie_loose_couples(std::map<std::pair<int, int>, std::vector
   // freely about that one: the crumple folded a letter's lit corner shut onto the next couple
   // along its edge, its paper to 0.08x. It is tied to the two nearest of its neighbour's
   // neighbours as well (the same piece), which makes it the corner of two triangles.
+  const std::vector<std::vector<int>> nbr = neighbour_lists(edges, coarse_->size());
   const int C = coarse_->size();
-  std::vector<std::vector<int>> nbr(C);
-  for (const auto& [e, opp] : edges) {
-    nbr[e.first].push_back(e.second);
-    nbr[e.second].push_back(e.first);
-  }
   const auto& pos = coarse_->positions();
   for (int c = 0; c < C; ++c) {
     if (nbr[c].size() != 1) continue;
@@ -127,11 +134,7 @@ void ControlSurface::build_topology() {
     add(2 * e.first, 2 * e.second + 1, 4);
     add(2 * e.first + 1, 2 * e.second, 4);
   }
-  std::vector<std::vector<int>> nbr(C);
-  for (const auto& [e, opp] : edges) {
-    nbr[e.first].push_back(e.second);
-    nbr[e.second].push_back(e.first);
-  }
+  std::vector<std::vector<int>> nbr = neighbour_lists(edges, C);
   topo_.nbr_offset.assign(1, 0);
   for (int c = 0; c < C; ++c) {
     if (nbr[c].empty())
