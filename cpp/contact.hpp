@@ -152,10 +152,14 @@ class Contacts {
   /// vertices it takes below the floor contacts, with dv's v_z prescribed; true if any.
   bool add_landings(double h, double* dv);
   /// @brief After a solve: contacts whose floor impulse (impulse(slot), kg m/s) pulls them down
-  /// are let go; returns whether any was (then the system is solved again).
+  /// are let go, and sticking ones it holds beyond friction slide; returns whether any changed
+  /// (then the system is solved again).
   bool release_pulled(double h, const std::function<Eigen::Vector3d(int slot)>& impulse);
   /// @brief After an implicit substep's move: a contact sits exactly on the floor.
   void settle(int v, double h);
+  /// @brief The friction impulse (kg m/s) the floor gives contact v in this substep's solve: a
+  /// contact whose hold asked more than friction allows slides, against the floor's friction.
+  Eigen::Vector3d friction_impulse(int v) const { return slide_.row(v).transpose(); }
   /// @brief Explicit substep, before the move: a vertex resting on the floor that the substep
   /// presses into it loses its normal speed and, by friction, its tangential speed.
   void press(int v);
@@ -194,6 +198,7 @@ class Contacts {
   RowMatX3 x_begin_;                    // per vertex: its position at the substep's start (colliders only)
   Eigen::VectorXd contact_;         // per vertex: floor impulse per mass of this substep, -1 if free
   std::vector<std::uint8_t> stick_; // per vertex: a contact held by static friction this substep
+  RowMatX3 slide_;                  // per vertex: friction impulse of a contact let slide in the solve (kg m/s)
   std::vector<int> list_;           // scratch vertex list
 };
 

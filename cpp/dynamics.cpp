@@ -787,7 +787,7 @@ void LatticeDynamics::implicit_rhs(double h) {
     }
     // Unfiltered: the solve filters its residual, and a contact's row of b is what
     // constraint_impulse weighs the floor's impulse against.
-    vec3(B.b, a) = h * (vec3(B.f, a) + h * Kw);
+    vec3(B.b, a) = h * (vec3(B.f, a) + h * Kw) + contacts_.friction_impulse(v);
   });
 }
 
