@@ -110,7 +110,7 @@ bool Contacts::add_landings(double h, double* dv) {
   return !list_.empty();
 }
 
-bool Contacts::release_pulled(double h, const std::function<Eigen::Vector3d(int slot)>& impulse) {
+bool Contacts::revise_contacts(double h, const std::function<Eigen::Vector3d(int slot)>& impulse) {
   // A contact is a prescribed v_z for the whole substep, so the floor could pull as well as
   // push: a vertex the rest of the shell lifts (a rolling shell's rear, a curling edge) was
   // held down, and a paper sphere rolling in a 3 m/s wind went 4.74 m in 4 s at 1/24 s against
@@ -184,7 +184,7 @@ void Contacts::apply_floor(double h) {
   for (int v : s_.active) {
     // Coulomb friction: the tangential speed drops by friction times the normal speed the
     // floor removed (from the contact filter, or from the projection below); a hold let slide
-    // had its friction in the solve (release_pulled).
+    // had its friction in the solve (revise_contacts).
     const bool slid_in_solve = slide_.row(v).squaredNorm() > 0.0;
     double removed = -1.0;
     if (implicit && contact_(v) >= 0.0 && !slid_in_solve) removed = contact_(v);

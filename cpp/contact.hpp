@@ -154,7 +154,7 @@ class Contacts {
   /// @brief After a solve: contacts whose floor impulse (impulse(slot), kg m/s) pulls them down
   /// are let go, and sticking ones it holds beyond friction slide; returns whether any changed
   /// (then the system is solved again).
-  bool release_pulled(double h, const std::function<Eigen::Vector3d(int slot)>& impulse);
+  bool revise_contacts(double h, const std::function<Eigen::Vector3d(int slot)>& impulse);
   /// @brief After an implicit substep's move: a contact sits exactly on the floor.
   void settle(int v, double h);
   /// @brief The friction impulse (kg m/s) the floor gives contact v in this substep's solve: a

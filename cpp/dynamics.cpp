@@ -845,14 +845,15 @@ int LatticeDynamics::implicit_substep(double h_step) {
     vec3(B.dv, a) = d0;
   }
   int iterations = solver_.solve(h);
-  // Contacts the floor would have to pull let go (before the landings, which change dv);
-  // vertices the solution takes below the floor become contacts; then the system is solved
-  // again from the last solution (each round changes at least one contact).
+  // Contacts the floor would have to pull let go, and holds beyond friction slide (before the
+  // landings, which change dv); vertices the solution takes below the floor become contacts;
+  // then the system is solved again from the last solution (each round changes at least one
+  // contact).
   const auto impulse = [&](int a) { return solver_.constraint_impulse(h, a); };
   for (int round = 1; round < kMaxContactRounds; ++round) {
-    const bool released = contacts_.release_pulled(h, impulse);
+    const bool revised = contacts_.revise_contacts(h, impulse);
     const bool landed = contacts_.add_landings(h, B.dv);
-    if (!landed && !released) break;
+    if (!landed && !revised) break;
     implicit_rhs(h);
     iterations += solver_.solve(h);
   }
