@@ -124,7 +124,6 @@ bool Contacts::revise_contacts(double h, const std::function<Eigen::Vector3d(int
   // pushed, and the system is solved again. Held regardless, the rolling sphere after 2 s
   // went 3.11 m at dt = 1/96 s and 4.09 m at 1/24 s (symplectic: 3.98 m): how often a
   // contact lasted a substep decided how far it rolled; now 4.09 and 4.30 m.
-  constexpr double kSlipRatio = 3.0;
   if (!s_.p.has_floor) return false;
   const double pull = 1e-6 * s_.p.gravity.norm() * h;  // per kg
   bool slid = false;
@@ -135,8 +134,8 @@ bool Contacts::revise_contacts(double h, const std::function<Eigen::Vector3d(int
     const double jt = std::hypot(J.x(), J.y()), jn = std::max(J.z(), 0.0);
     if (J.z() < -pull * s_.mass(v)) {
       list_.push_back(v);
-    } else if (stick_[v] && jt > kSlipRatio * s_.p.friction * jn + pull * s_.mass(v)) {
-      // kSlipRatio: let go only where the solve asks clearly more than friction allows. At 1
+    } else if (stick_[v] && jt > s_.p.slip_ratio * s_.p.friction * jn + pull * s_.mass(v)) {
+      // slip_ratio (3): let go only where the solve asks clearly more than friction allows. At 1
       // a mirror-symmetric burn's pair of corners, each at the threshold, let go one at a
       // time and the sheet slid 0.6 mm aside (tests/test_simulation_shell.py's symmetric
       // burn: 23 % of its motion against 0.64 %). The layers of a stack have no friction

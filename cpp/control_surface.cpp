@@ -80,8 +80,8 @@ void ControlSurface::tie_loose_couples(std::map<std::pair<int, int>, std::vector
   // freely about that one: the crumple folded a letter's lit corner shut onto the next couple
   // along its edge, its paper to 0.08x. It is tied to the two nearest of its neighbour's
   // neighbours as well (the same piece), which makes it the corner of two triangles.
-  const std::vector<std::vector<int>> nbr = neighbour_lists(edges, coarse_->size());
   const int C = coarse_->size();
+  const std::vector<std::vector<int>> nbr = neighbour_lists(edges, C);
   const auto& pos = coarse_->positions();
   for (int c = 0; c < C; ++c) {
     if (nbr[c].size() != 1) continue;

@@ -84,6 +84,8 @@ const std::vector<param::Field<DynamicsParams>>& DynamicsParams::fields() {
       field("has_floor", &P::has_floor, "nothing goes below floor_z"),
       field("floor_z", &P::floor_z, "m: the floor's height"),
       field("friction", &P::friction, at_least(0), "Coulomb coefficient on the floor"),
+      field("slip_ratio", &P::slip_ratio, at_least(1),
+            "implicit: a sticking floor contact whose hold asks more than slip_ratio x friction slides"),
       field("self_collision", &P::self_collision, "couples keep self_distance from the sheet's other layers"),
       field("self_distance", &P::self_distance, above(0),
             "lattice thicknesses a couple keeps from other parts of the sheet",

@@ -72,6 +72,7 @@ struct DynamicsParams {
   bool has_floor = false;      ///< nothing goes below floor_z when set
   double floor_z = 0.0;        ///< m
   double friction = 0.5;       ///< Coulomb coefficient on the floor (>= 0)
+  double slip_ratio = 3.0;     ///< implicit: a sticking floor contact the solve holds beyond slip_ratio x friction slides (docs/dynamics.md §3)
   bool self_collision = true;  ///< couples keep self_distance from the sheet's other layers (self_contact.hpp)
   double self_distance = 1.0;  ///< lattice thicknesses between a couple's mid-point and another part of the sheet (> 0)
   int contact_rounds = 3;      ///< while layers touch, turns of strain limit, floor and self-contact after a substep's self-contact (0: once, last)

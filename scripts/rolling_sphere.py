@@ -5,10 +5,11 @@ mesh point rode above the table after the first 0.5 s (median, mean, largest), w
 seconds a simulated second.
 
     python scripts/rolling_sphere.py [--dts 24 96 240] [--integrators implicit symplectic] [--seconds 4]
-                                     [--friction 0.5] [--substeps N]
+                                     [--friction 0.5] [--substeps N] [--slip-ratio 3]
 
 --substeps fixes the substeps of each step (no stretch redo): `--dts 24 --substeps 160` is the
-implicit run's own small-step limit (docs/dynamics.md §3).
+implicit run's own small-step limit (docs/dynamics.md §3). --slip-ratio sets the dynamics'
+slip_ratio (a held floor contact slides beyond it times friction).
 """
 import argparse
 import time
@@ -19,7 +20,7 @@ import thinburn
 from thinburn.demo import shell_scene
 
 
-def roll(steps_per_second, integrator, seconds=4.0, wind=3.0, friction=None, substeps=0):
+def roll(steps_per_second, integrator, seconds=4.0, wind=3.0, friction=None, substeps=0, slip_ratio=None):
     sc = shell_scene("sphere")
     sim = thinburn.Simulation(sc.vertices, sc.faces, material="paper", cells=32, floor=0.0,
                               integrator=integrator)
@@ -27,6 +28,8 @@ def roll(steps_per_second, integrator, seconds=4.0, wind=3.0, friction=None, sub
         sim.set_dynamics(friction=friction)
     if substeps:
         sim.set_dynamics(substeps=substeps)
+    if slip_ratio is not None:
+        sim.set_dynamics(slip_ratio=slip_ratio)
     sim.wind = (wind, 0.0, 0.0)
     dt = 1.0 / steps_per_second
     n = int(round(seconds / dt))
@@ -51,11 +54,12 @@ def main():
     ap.add_argument("--seconds", type=float, default=4.0)
     ap.add_argument("--friction", type=float, default=None, help="the floor's (default: the material's 0.5)")
     ap.add_argument("--substeps", type=int, default=0, help="fixed substeps per step (default 0: chosen per step)")
+    ap.add_argument("--slip-ratio", type=float, default=None, help="the dynamics' slip_ratio (default 3)")
     a = ap.parse_args()
     for integrator in a.integrators:
         for sps in a.dts:
             travel, speed, low, wall = roll(sps, integrator, a.seconds, friction=a.friction,
-                                           substeps=a.substeps)
+                                           substeps=a.substeps, slip_ratio=a.slip_ratio)
             fixed = f" x {a.substeps}" if a.substeps else ""
             print(f"{integrator:10s} dt = 1/{sps:<4d}{fixed} travelled {travel:5.3f} m, {speed:4.2f} m/s over the last half; "
                   f"lowest point above the table: median {1000 * np.median(low):5.2f} mm, mean "

@@ -231,7 +231,7 @@ def test_the_python_key_lists_are_the_tables_names():
         "k_structure", "k_shear", "k_flex", "c_damping", "has_floor", "floor_z", "integrator"}
     assert set(simulation.DYNAMICS_KEYS) == {
         "k_thickness", "k_transverse", "stiffness_unit", "flexural_rigidity", "buoyancy", "wind_drag",
-        "friction", "self_collision", "self_distance", "contact_rounds", "strain_limit", "k_limit", "crumple_gain", "plasticity",
+        "friction", "slip_ratio", "self_collision", "self_distance", "contact_rounds", "strain_limit", "k_limit", "crumple_gain", "plasticity",
         "crumple_momentum",
         "bimetal", "anisotropic_curl", "sleep_speed", "sleeping", "substeps", "max_substeps", "safety",
         "max_stretch", "cg_tolerance", "cg_max_iterations", "gravity", "preconditioner",

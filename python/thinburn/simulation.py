@@ -142,7 +142,9 @@ class Simulation:
           neighbouring couples, 0 = none, docs/dynamics.md §3.4), ``k_limit`` (1: beyond
           0.8 of strain_limit the membrane stiffens by k_limit * stiffness_unit N/m, so that
           a hanging fabric rests where it would at any step; 0 = none, §3.4 "The knee"), ``buoyancy``,
-          ``wind_drag``, ``friction``, ``crumple_gain``, ``plasticity``, ``crumple_momentum``,
+          ``wind_drag``, ``friction``, ``slip_ratio`` (3, at least 1: an implicit floor contact
+          held by static friction slides where the solve asks more than slip_ratio x friction
+          of it, docs/dynamics.md §3), ``crumple_gain``, ``plasticity``, ``crumple_momentum``,
           ``bimetal`` (default True: D shrinks the heated face's springs, docs/dynamics.md §2;
           False: the paper's prescribed chord motion), ``sleep_speed``,
           ``sleeping``, ``substeps`` (0, the default, chooses them per step; a fixed count is
