@@ -1,5 +1,6 @@
-"""Floor contact (cpp/contact.*, docs/dynamics.md §3): nothing goes through the floor, and a
-crumpling sheet lying on it stays upright."""
+"""Floor contact (cpp/contact.*, docs/dynamics.md §3): nothing goes through the floor, a
+crumpling sheet lying on it stays upright, a rolling sphere rolls as far at any step, and on a
+slope (gravity tilted) a sheet holds or slides as Coulomb's law says."""
 import functools
 
 import numpy as np
