@@ -177,8 +177,9 @@ def test_a_flat_sheet_resting_on_a_slope_does_not_creep():
     follows its tilt (FloorSupport); as the couples sway it drops by 10 um every other step,
     leaves the contacts a hair above the floor, free for a step, and the sheet creeps downhill:
     over the 2 s after the first, 116.5 mm at dt = 1/24 s and 35.0 mm at 1/96 s (1/480 s:
-    0.000). On the branch wip/floor-coulomb a contact still where the last substep settled it
-    stays one: 0.000 mm at both after its landing (5.8 and 0.36 mm). Bound 0.01 mm."""
+    0.000). A contact still where the last substep settled it staying one (alone, on main's
+    code) left 0.000 mm at both after its landing (5.8 and 0.36 mm); the branch
+    wip/floor-coulomb moves it 0.000 mm throughout. Bound 0.01 mm."""
     for sps in (24, 96):
         _, after = SLOPE.sheet_creep(20.0, 1 / sps)
         assert abs(after) < 1e-5
